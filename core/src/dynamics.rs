@@ -73,11 +73,7 @@ pub fn applied_forces<T: Real>(
             }
         }
     }
-    for ld in model.loads() {
-        let b = ws.body.get(ld.body as usize).copied().unwrap_or_default();
-        let at = b.o + rotate_cs(b.c, b.s, &ld.point);
-        add_load(model, ws, &mut f, ld.body, at, ld.force, ld.moment);
-    }
+    add_external_loads(model, ws, &mut f);
     for (d, slot) in model.drives().iter().zip(ws.motor.iter_mut()) {
         let j = d.coord as usize;
         let (q, qd) = (
@@ -117,6 +113,32 @@ pub fn applied_forces<T: Real>(
     }
     ws.force = f;
     Ok(())
+}
+
+/// Adds the model's constant loads and the workspace's caller-set moments
+/// (`ws.applied_moment`) to `f` (shared by the equations of motion and the
+/// kinetostatics).
+pub(crate) fn add_external_loads<T: Real>(
+    model: &Model<T>,
+    ws: &Workspace<T>,
+    f: &mut SVector<T, POSE_ROWS>,
+) {
+    for ld in model.loads() {
+        let b = ws.body.get(ld.body as usize).copied().unwrap_or_default();
+        let at = b.o + rotate_cs(b.c, b.s, &ld.point);
+        add_load(model, ws, f, ld.body, at, ld.force, ld.moment);
+    }
+    for (i, m) in ws
+        .applied_moment
+        .iter()
+        .enumerate()
+        .skip(1)
+        .take(model.n_links())
+    {
+        if let Some(e) = f.get_mut(3 * (i - 1) + 2) {
+            *e += *m;
+        }
+    }
 }
 
 /// `M·v` for a pose-space vector (`m` on the two translations, `I_G` on the rotation).
@@ -163,8 +185,20 @@ pub fn generalized_accelerations<T: Real>(
     q: &[T],
     qd: &[T],
 ) -> Result<(), StepError> {
+    evaluate(model, ws, q, qd, t.to_f64())?;
+    solve_accelerations(model, ws, t)
+}
+
+/// The second half of [`generalized_accelerations`]: applied loads, `VᵀMV`,
+/// `Vᵀ(F - M a_b)` and `q̈`, at the kinematics the workspace already holds (from
+/// [`evaluate`]). Lets a caller set loads that depend on the evaluated motion (a motor
+/// law on a link that is not a coordinate, into `ws.applied_moment`) in between.
+pub fn solve_accelerations<T: Real>(
+    model: &Model<T>,
+    ws: &mut Workspace<T>,
+    t: T,
+) -> Result<(), StepError> {
     let time = t.to_f64();
-    evaluate(model, ws, q, qd, time)?;
     applied_forces(model, ws, t)?;
     let m = model.dof().min(MAX_DOF);
     let rows = 3 * model.n_links();

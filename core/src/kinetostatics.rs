@@ -9,7 +9,7 @@
 //! so that in a forward-dynamics run they must come out equal to the applied ones.
 
 use crate::config::{MAX_BODIES, POSE_ROWS};
-use crate::dynamics::{add_load, mass_times};
+use crate::dynamics::{add_external_loads, add_load, mass_times};
 use crate::error::{GroupFault, StepError};
 use crate::kinematics::group_id;
 use crate::model::Model;
@@ -18,7 +18,8 @@ use crate::structomat::{Group, JointKind};
 use crate::workspace::{Reaction, Workspace};
 use nalgebra::{SMatrix, SVector};
 
-/// Loads on each body without the motors: gravity, constant loads and inertia.
+/// Loads on each body without the motors: gravity, constant and caller-set loads, and
+/// inertia.
 fn free_body_loads<T: Real>(model: &Model<T>, ws: &Workspace<T>) -> SVector<T, POSE_ROWS> {
     let mut f = SVector::<T, POSE_ROWS>::zeros();
     let g = model.gravity();
@@ -30,11 +31,7 @@ fn free_body_loads<T: Real>(model: &Model<T>, ws: &Workspace<T>) -> SVector<T, P
             *e = l.mass * g.y;
         }
     }
-    for ld in model.loads() {
-        let b = ws.body.get(ld.body as usize).copied().unwrap_or_default();
-        let at = b.o + rotate_cs(b.c, b.s, &ld.point);
-        add_load(model, ws, &mut f, ld.body, at, ld.force, ld.moment);
-    }
+    add_external_loads(model, ws, &mut f);
     let qdd = SVector::from_column_slice(&ws.qdd);
     let acc = ws.a_bias + ws.v * qdd;
     f - mass_times(model, &acc)

@@ -46,6 +46,7 @@
 // false with everything, so the negated test catches it where `x <= 0` would not.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+pub mod ccc;
 pub mod config;
 pub mod dynamics;
 pub mod error;

@@ -81,6 +81,12 @@ pub struct Workspace<T: Real> {
     pub gen_force: SVector<T, MAX_DOF>,
     /// Torque (N·m) or force (N) of each drive at the last evaluation.
     pub motor: [T; MAX_DRIVES],
+    /// External moments set by the caller (N·m, CCW, by body index; index 0, the
+    /// ground, is ignored), like MuJoCo's `xfrc_applied`: inputs that change at run time
+    /// (a measured motor torque, a load torque) without rebuilding the model. Added to
+    /// the applied loads of the equations of motion and of the kinetostatics; each
+    /// acts between its link and the ground.
+    pub applied_moment: [T; MAX_BODIES],
     /// Joint reactions of each group (kinetostatics), in the order of its joints.
     pub reactions: [[Reaction<T>; MAX_GROUP_JOINTS]; MAX_GROUPS],
     /// Evaluations of the equations of motion so far.
@@ -108,6 +114,7 @@ impl<T: Real> Workspace<T> {
             mass_q: SMatrix::identity(),
             gen_force: SVector::zeros(),
             motor: [T::zero(); MAX_DRIVES],
+            applied_moment: [T::zero(); MAX_BODIES],
             reactions: [[Reaction::default(); MAX_GROUP_JOINTS]; MAX_GROUPS],
             evaluations: 0,
         }

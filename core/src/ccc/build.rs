@@ -1,0 +1,329 @@
+//! Builds the core model of one mode and coordinate choice (SPEC 3's sequences) from
+//! the converter's parameters and the current physical pose: nothing here is
+//! hand-written kinematics, only links, ground points and groups, as in
+//! [`mechanisms`](crate::mechanisms).
+//!
+//! A mode's model differs from the others in ways that depend on the state: a locked
+//! lever is part of the ground (its pin is a ground point where it stopped), A68 joins
+//! both levers and the shaft into one body (their angle difference is the one at
+//! engagement), and every group's guesses are the current link angles so that assembly
+//! keeps the current branch. So models are built at each mode or coordinate switch
+//! (bounded work, no heap), and model bodies are mapped to the physical links.
+
+use super::mode::{Clutch, Coordinates, Mode};
+use super::params::{circle_meet, CccParams};
+use crate::config::MAX_BODIES;
+use crate::error::ModelError;
+use crate::model::{Link, Model, ModelBuilder};
+use crate::scalar::{Real, Vec2};
+use crate::structomat::{DyadRrr, MotorR, PointRef, TriadRrRrRr};
+
+/// Physical link numbers (SPEC 3).
+pub(crate) const CRANK: usize = 1;
+pub(crate) const COUPLER: usize = 2;
+pub(crate) const ROCKER: usize = 3;
+pub(crate) const SWING: usize = 4;
+/// The rods and levers of the two diode branches: `(rod, lever)`.
+pub(crate) const BRANCHES: [(usize, usize); 2] = [(5, 6), (7, 8)];
+
+/// Point indices in the link frames. Bars run from their point 0 to their point 1:
+/// crank A→B, coupler B→C, rocker E→C (D is its point 2), swing link F→E, rods D→G and
+/// D→I, levers H→G and H→I (the joined levers of A68: H, G, I).
+const P0: u8 = 0;
+const P1: u8 = 1;
+const ROCKER_D: u8 = 2;
+const JOINED_I: u8 = 2;
+const _: () = assert!(crate::config::MAX_LINK_POINTS >= 3, "the rocker carries D");
+
+/// Where each physical link is in a mode's model.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct BodyMap<T> {
+    /// Model body of physical link `p` (index `p`, 1..=8); 0 for a locked lever.
+    pub body: [u8; 9],
+    /// Angle of physical link `p` minus its model body's angle (lever 8 in A68); for a
+    /// locked lever, its fixed angle, rad.
+    pub offset: [T; 9],
+    /// Physical link of each model body (index: body), for naming groups.
+    pub phys: [u8; MAX_BODIES],
+    /// The physical link whose angle each coordinate is.
+    pub coord_link: [u8; 2],
+    /// Degrees of freedom.
+    pub dof: usize,
+}
+
+fn lever_point<T: Real>(p: &CccParams<T>, lever: usize, angle: T) -> Vec2<T> {
+    p.h + Vec2::new(angle.cos(), angle.sin()) * p.link(lever).length
+}
+
+/// Physical link `k` as a core link: a bar with its COG at its midpoint; the rocker
+/// also carries D (its point 2) and the oscillating mass.
+pub(crate) fn physical_link<T: Real>(p: &CccParams<T>, k: usize) -> Link<T> {
+    let b = p.link(k);
+    let mut link = Link::bar(b.length, b.mass, b.inertia, b.length * T::c(0.5));
+    if k == ROCKER {
+        // Capacity: a bar has 2 of MAX_LINK_POINTS >= 3 points.
+        let _ = link.add_point(Vec2::new(p.rocker_d, T::zero()));
+        link.add_mass(p.mass, p.mass_inertia, Vec2::new(p.mass_at, T::zero()));
+    }
+    link
+}
+
+/// The model of `mode` driven by `coords`, at the physical link angles `pose` (rad,
+/// index 1..=8: group guesses, locked levers' angles, A68's lever offset).
+pub(crate) fn build<T: Real>(
+    p: &CccParams<T>,
+    mode: Mode,
+    coords: Coordinates,
+    pose: &[T; 9],
+) -> Result<(Model<T>, BodyMap<T>), ModelError> {
+    if !mode.coordinate_choices().contains(&coords) {
+        return Err(ModelError::Coordinates(
+            "converter: this coordinate choice does not drive this mode",
+        ));
+    }
+    let th = |k: usize| pose.get(k).copied().unwrap_or(T::zero());
+    let mut b = ModelBuilder::new();
+    b.gravity(p.gravity);
+    let a = b.ground_point(p.a.x, p.a.y)?;
+    let f = b.ground_point(p.f.x, p.f.y)?;
+    let h = b.ground_point(p.h.x, p.h.y)?;
+    let mut map = BodyMap {
+        body: [0; 9],
+        offset: [T::zero(); 9],
+        phys: [0; MAX_BODIES],
+        coord_link: [0; 2],
+        dof: mode.dof(),
+    };
+    let clutches = mode.clutches();
+    let joined = mode == Mode::A68;
+    // Locked levers: their pins become ground points.
+    let mut pin = [None; 2];
+    for (k, (_, lever)) in BRANCHES.iter().enumerate() {
+        if clutches[k] == Clutch::Locked {
+            let at = lever_point(p, *lever, th(*lever));
+            pin[k] = Some(b.ground_point(at.x, at.y)?);
+            map.offset[*lever] = th(*lever);
+        }
+    }
+    // Links, in physical order.
+    for k in 1..=8 {
+        let lever_branch = BRANCHES.iter().position(|(_, l)| *l == k);
+        if let Some(br) = lever_branch {
+            if clutches[br] == Clutch::Locked {
+                continue;
+            }
+            if joined && k == 8 {
+                map.body[8] = map.body[6];
+                map.offset[8] = th(8) - th(6);
+                continue;
+            }
+        }
+        let mut link = physical_link(p, k);
+        if joined && k == 6 {
+            // Lever 6's frame; lever 8 at the angle it had at engagement.
+            let d = th(8) - th(6);
+            let u = Vec2::new(d.cos(), d.sin());
+            let l8 = p.link(8);
+            link.add_point(u * l8.length)?;
+            link.add_mass(l8.mass, l8.inertia, u * (l8.length * T::c(0.5)));
+        }
+        let shaft_on_this = match lever_branch {
+            Some(br) => clutches[br] == Clutch::Engaged && !(joined && k == 8),
+            None => false,
+        };
+        if shaft_on_this && p.shaft_inertia > T::zero() {
+            // The shaft turns with this lever about H, the lever's origin.
+            link.add_mass(T::zero(), p.shaft_inertia, Vec2::zeros());
+        }
+        let body = b.link(link)?;
+        map.body[k] = body;
+        if let Some(slot) = map.phys.get_mut(body as usize) {
+            *slot = k as u8;
+        }
+    }
+    let bodies = map.body;
+    let body = |k: usize| bodies.get(k).copied().unwrap_or(0);
+    let pt = |k: usize, point: u8| PointRef {
+        body: body(k),
+        point,
+    };
+    let motor = |b: &mut ModelBuilder<T>,
+                 link: usize,
+                 pivot: PointRef,
+                 link_point: u8,
+                 coord: u8|
+     -> Result<(), ModelError> {
+        b.group(&MotorR {
+            link: body(link),
+            pivot,
+            link_point,
+            coord,
+            offset: T::zero(),
+        })?;
+        Ok(())
+    };
+    // Dyad RRR of links `la` (on pole `pa` at its point `a_at`, joint at `a_j`) and
+    // `lb` (on `pb` at `b_at`, joint at `b_j`), guessed at the current angles.
+    let rrr = |b: &mut ModelBuilder<T>,
+               (la, pa, a_at, a_j): (usize, PointRef, u8, u8),
+               (lb, pb, b_at, b_j): (usize, PointRef, u8, u8)|
+     -> Result<(), ModelError> {
+        b.group(&DyadRrr {
+            a: body(la),
+            b: body(lb),
+            pole_a: pa,
+            a_at_pole: a_at,
+            pole_b: pb,
+            b_at_pole: b_at,
+            a_joint: a_j,
+            b_joint: b_j,
+            guess: [th(la), th(lb)],
+        })?;
+        Ok(())
+    };
+    // Recurring dyads: the crank and coupler from C (RRR(1,2)), the rocker and swing
+    // link from D (RRR(3,4)), a free diode branch from D (RRR(rod, lever)).
+    let crank_from_c =
+        |b: &mut ModelBuilder<T>| rrr(b, (COUPLER, pt(ROCKER, P1), P1, P0), (CRANK, a, P0, P1));
+    let rocker_from = |b: &mut ModelBuilder<T>, d: PointRef| {
+        rrr(b, (ROCKER, d, ROCKER_D, P0), (SWING, f, P0, P1))
+    };
+    let free_branch = |b: &mut ModelBuilder<T>, k: usize| {
+        let (rod, lever) = BRANCHES[k];
+        rrr(b, (rod, pt(ROCKER, ROCKER_D), P0, P1), (lever, h, P0, P1))
+    };
+    let locked = clutches.iter().position(|c| *c == Clutch::Locked);
+    match coords {
+        Coordinates::CrankSwing => {
+            motor(&mut b, CRANK, a, P0, 0)?;
+            motor(&mut b, SWING, f, P0, 1)?;
+            rrr(
+                &mut b,
+                (COUPLER, pt(CRANK, P1), P0, P1),
+                (ROCKER, pt(SWING, P1), P0, P1),
+            )?;
+            map.coord_link = [CRANK as u8, SWING as u8];
+        }
+        Coordinates::CrankCoupler => {
+            motor(&mut b, CRANK, a, P0, 0)?;
+            motor(&mut b, COUPLER, pt(CRANK, P1), P0, 1)?;
+            rrr(
+                &mut b,
+                (ROCKER, pt(COUPLER, P1), P1, P0),
+                (SWING, f, P0, P1),
+            )?;
+            map.coord_link = [CRANK as u8, COUPLER as u8];
+        }
+        Coordinates::SwingRocker => {
+            motor(&mut b, SWING, f, P0, 0)?;
+            motor(&mut b, ROCKER, pt(SWING, P1), P0, 1)?;
+            crank_from_c(&mut b)?;
+            map.coord_link = [SWING as u8, ROCKER as u8];
+        }
+        Coordinates::Crank | Coordinates::Swing | Coordinates::Rod => {
+            let Some(k) = locked.filter(|_| mode.dof() == 1) else {
+                return Err(ModelError::Coordinates(
+                    "converter: this coordinate choice needs one locked lever",
+                ));
+            };
+            let (rod, _) = BRANCHES[k];
+            let pin = pin[k].ok_or(ModelError::Coordinates("converter: no locked pin"))?;
+            match coords {
+                Coordinates::Crank => {
+                    motor(&mut b, CRANK, a, P0, 0)?;
+                    b.group(&TriadRrRrRr {
+                        ternary: body(ROCKER),
+                        ternary_joints: [P1, P0, ROCKER_D],
+                        binary: [body(COUPLER), body(SWING), body(rod)],
+                        binary_at_pole: [P0, P0, P1],
+                        binary_at_ternary: [P1, P1, P0],
+                        poles: [pt(CRANK, P1), f, pin],
+                        guess: [th(COUPLER), th(SWING), th(rod), th(ROCKER)],
+                    })?;
+                    map.coord_link = [CRANK as u8, 0];
+                }
+                Coordinates::Swing => {
+                    motor(&mut b, SWING, f, P0, 0)?;
+                    rrr(
+                        &mut b,
+                        (ROCKER, pt(SWING, P1), P0, ROCKER_D),
+                        (rod, pin, P1, P0),
+                    )?;
+                    crank_from_c(&mut b)?;
+                    map.coord_link = [SWING as u8, 0];
+                }
+                _ => {
+                    motor(&mut b, rod, pin, P1, 0)?;
+                    rocker_from(&mut b, pt(rod, P0))?;
+                    crank_from_c(&mut b)?;
+                    map.coord_link = [rod as u8, 0];
+                }
+            }
+            free_branch(&mut b, 1 - k)?;
+            map.dof = 1;
+            return b.build().map(|m| (m, map));
+        }
+        Coordinates::Lever => {
+            let (rod5, lever6) = BRANCHES[0];
+            let (rod7, _) = BRANCHES[1];
+            motor(&mut b, lever6, h, P0, 0)?;
+            rrr(
+                &mut b,
+                (rod5, pt(lever6, P1), P1, P0),
+                (rod7, pt(lever6, JOINED_I), P1, P0),
+            )?;
+            rocker_from(&mut b, pt(rod5, P0))?;
+            crank_from_c(&mut b)?;
+            map.coord_link = [lever6 as u8, 0];
+            return b.build().map(|m| (m, map));
+        }
+        Coordinates::Rest => {
+            let (Some(g), Some(i)) = (pin[0], pin[1]) else {
+                return Err(ModelError::Coordinates(
+                    "converter: rest needs both levers locked",
+                ));
+            };
+            let (rod5, _) = BRANCHES[0];
+            let (rod7, _) = BRANCHES[1];
+            rrr(&mut b, (rod5, g, P1, P0), (rod7, i, P1, P0))?;
+            rocker_from(&mut b, pt(rod5, P0))?;
+            crank_from_c(&mut b)?;
+            return b.build().map(|m| (m, map));
+        }
+    }
+    // The 2-DOF sequences end with both diode branches as free dyads.
+    free_branch(&mut b, 0)?;
+    free_branch(&mut b, 1)?;
+    b.build().map(|m| (m, map))
+}
+
+/// The physical link angles (rad, index 1..=8) of the converter assembled at crank
+/// angle `crank` and swing-link angle `swing` on the parameters' branches (SPEC 3:
+/// C from circles about B and E, D on the rocker, G and I from circles about D and H);
+/// `None` if it cannot assemble there.
+pub(crate) fn initial_pose<T: Real>(p: &CccParams<T>, crank: T, swing: T) -> Option<[T; 9]> {
+    let u = |a: T| Vec2::new(a.cos(), a.sin());
+    let angle = |v: Vec2<T>| v.y.atan2(v.x);
+    let b = p.a + u(crank) * p.link(CRANK).length;
+    let e = p.f + u(swing) * p.link(SWING).length;
+    let c = circle_meet(
+        b,
+        p.link(COUPLER).length,
+        e,
+        p.link(ROCKER).length,
+        p.branch_c,
+    )?;
+    let rocker = angle(c - e);
+    let d = e + u(rocker) * p.rocker_d;
+    let mut pose = [T::zero(); 9];
+    pose[CRANK] = crank;
+    pose[COUPLER] = angle(c - b);
+    pose[ROCKER] = rocker;
+    pose[SWING] = swing;
+    for ((rod, lever), side) in BRANCHES.iter().zip([p.branch_g, p.branch_i]) {
+        let pin = circle_meet(d, p.link(*rod).length, p.h, p.link(*lever).length, side)?;
+        pose[*rod] = angle(pin - d);
+        pose[*lever] = angle(pin - p.h);
+    }
+    Some(pose)
+}

@@ -1,0 +1,19 @@
+//! The Constantinesco torque converter (SPEC 3) as a digital twin on the core: its
+//! parameters, its modes and their motion-transmission sequences, and [`Twin`], the
+//! fixed-step stepper with the mechanical diode's events, consistent mode choice,
+//! plastic impacts and coordinate switching at dead points.
+
+mod build;
+pub mod mode;
+pub mod params;
+
+pub use mode::{Clutch, Coordinates, Mode};
+pub use params::{Bar, CccParams, DriveDirection, Side};
+mod slot;
+mod twin;
+
+pub use slot::{Inputs, LinkState, MotorInput, JOINTS, JOINT_NAMES};
+pub use twin::{
+    Audit, CoordinateSwitch, Event, EventKind, Failure, Twin, TwinError, TwinSettings,
+    MAX_EVENTS_PER_STEP, MAX_LOCATE_ITER, MAX_RETRIES,
+};

@@ -1,0 +1,207 @@
+//! The converter's parameters (SPEC 3): the reference geometry by default, every value
+//! changeable, validated once by [`CccParams::validate`].
+
+use crate::error::ModelError;
+use crate::scalar::{Real, Vec2};
+
+/// Which way the output shaft turns (SPEC 3: the reference converter turns clockwise).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DriveDirection {
+    /// Clockwise: lever 8 drives while D moves away from H, lever 6 while it comes
+    /// closer.
+    Cw,
+    /// Counter-clockwise: the mirror roles.
+    Ccw,
+}
+
+impl DriveDirection {
+    /// `+1` for CCW, `-1` for CW: multiplies a CCW-positive angular quantity into "in the
+    /// drive direction".
+    pub fn sign<T: Real>(self) -> T {
+        match self {
+            DriveDirection::Cw => -T::one(),
+            DriveDirection::Ccw => T::one(),
+        }
+    }
+}
+
+/// An assembly branch: on which side of the directed line from a group's first pole to
+/// its second the joint sits.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Side {
+    /// Left of the line (CCW side).
+    Left,
+    /// Right of the line.
+    Right,
+}
+
+/// Length (m), mass (kg) and moment of inertia about the COG (kg·m²) of a bar whose COG
+/// is at its midpoint.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Bar<T> {
+    /// Joint-to-joint length, m.
+    pub length: T,
+    /// Mass, kg.
+    pub mass: T,
+    /// Moment of inertia about the COG, kg·m².
+    pub inertia: T,
+}
+
+/// The converter (SPEC 3, thesis tables 8-9). Physical links, numbered as in SPEC:
+/// 1 crank A→B, 2 coupler B→C, 3 rocker E→C (D on it), 4 swing link F→E, 5 and 7 the
+/// diode rods D→G and D→I, 6 and 8 the diode levers H→G and H→I (H: the output shaft).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CccParams<T> {
+    /// Crank pivot A, m.
+    pub a: Vec2<T>,
+    /// Swing-link pivot F, m.
+    pub f: Vec2<T>,
+    /// Output shaft H, m.
+    pub h: Vec2<T>,
+    /// Links 1..8 (index 0 is link 1). Each bar's own COG is at its midpoint.
+    pub links: [Bar<T>; 8],
+    /// Distance from E to D along the rocker, m (SPEC: its midpoint).
+    pub rocker_d: T,
+    /// The oscillating mass, kg.
+    pub mass: T,
+    /// Its own moment of inertia, kg·m².
+    pub mass_inertia: T,
+    /// Its distance from E along the rocker, m (SPEC: at C, the rocker's end).
+    pub mass_at: T,
+    /// Output shaft inertia J_s, kg·m² (SPEC: 0, the thesis has none).
+    pub shaft_inertia: T,
+    /// The direction the shaft turns.
+    pub drive: DriveDirection,
+    /// Gravity, m/s².
+    pub gravity: Vec2<T>,
+    /// Branch of C: side of B→E (reference: right, C with the larger x).
+    pub branch_c: Side,
+    /// Branch of G: side of D→H (reference: left, G above line DH).
+    pub branch_g: Side,
+    /// Branch of I: side of D→H (reference: right, I below line DH).
+    pub branch_i: Side,
+}
+
+impl<T: Real> CccParams<T> {
+    /// SPEC 3's reference converter, shaft turning clockwise.
+    pub fn reference() -> Self {
+        let c = T::c;
+        let bar = |length: f64, mass: f64, inertia: f64| Bar {
+            length: c(length),
+            mass: c(mass),
+            inertia: c(inertia),
+        };
+        CccParams {
+            a: Vec2::new(c(0.0), c(0.0)),
+            f: Vec2::new(c(0.20), c(0.50)),
+            h: Vec2::new(c(1.10), c(0.0)),
+            links: [
+                bar(0.075, 0.688, 0.0010),
+                bar(0.350, 2.888, 0.0330),
+                bar(0.700, 5.462, 0.2390),
+                bar(0.100, 0.888, 0.0010),
+                bar(0.650, 5.288, 0.1960),
+                bar(0.300, 2.488, 0.0220),
+                bar(0.650, 5.288, 0.1960),
+                bar(0.300, 2.488, 0.0220),
+            ],
+            rocker_d: c(0.350),
+            mass: c(6.0),
+            mass_inertia: c(0.0400),
+            mass_at: c(0.700),
+            shaft_inertia: c(0.0),
+            drive: DriveDirection::Cw,
+            gravity: Vec2::new(c(0.0), c(-9.81)),
+            branch_c: Side::Right,
+            branch_g: Side::Left,
+            branch_i: Side::Right,
+        }
+    }
+
+    /// Link `p` (1..=8).
+    pub fn link(&self, p: usize) -> Bar<T> {
+        self.links.get(p.wrapping_sub(1)).copied().unwrap_or(Bar {
+            length: T::one(),
+            mass: T::zero(),
+            inertia: T::zero(),
+        })
+    }
+
+    /// Moment of inertia of lever `p` (6 or 8) about the shaft H, kg·m² (bar with its
+    /// COG at its midpoint).
+    pub fn lever_inertia_about_h(&self, p: usize) -> T {
+        let b = self.link(p);
+        let r = b.length * T::c(0.5);
+        b.inertia + b.mass * r * r
+    }
+
+    /// Checks every value: finite, lengths and masses positive, inertias non-negative,
+    /// D and the mass on the rocker.
+    pub fn validate(&self) -> Result<(), ModelError> {
+        let fin = |x: T, what| {
+            if x.finite() {
+                Ok(())
+            } else {
+                Err(ModelError::NonFinite(what))
+            }
+        };
+        for p in [self.a, self.f, self.h, self.gravity] {
+            fin(p.x, "converter: point or gravity")?;
+            fin(p.y, "converter: point or gravity")?;
+        }
+        for b in self.links.iter() {
+            fin(b.length, "converter: link length")?;
+            fin(b.mass, "converter: link mass")?;
+            fin(b.inertia, "converter: link inertia")?;
+            if !(b.length > T::zero()) {
+                return Err(ModelError::NotPositive("converter: link length"));
+            }
+            if !(b.mass > T::zero()) || b.inertia < T::zero() {
+                return Err(ModelError::Negative("converter: link mass or inertia"));
+            }
+        }
+        for (x, what) in [
+            (self.rocker_d, "converter: D on the rocker"),
+            (self.mass, "converter: oscillating mass"),
+            (self.mass_inertia, "converter: oscillating mass inertia"),
+            (self.mass_at, "converter: oscillating mass position"),
+            (self.shaft_inertia, "converter: shaft inertia"),
+        ] {
+            fin(x, what)?;
+            if x < T::zero() {
+                return Err(ModelError::Negative(what));
+            }
+        }
+        if !(self.rocker_d > T::zero()) {
+            return Err(ModelError::NotPositive("converter: D on the rocker"));
+        }
+        Ok(())
+    }
+}
+
+/// The intersection of circle(`p`, `rp`) and circle(`q`, `rq`) on side `side` of p→q;
+/// `None` if they do not meet.
+pub(crate) fn circle_meet<T: Real>(
+    p: Vec2<T>,
+    rp: T,
+    q: Vec2<T>,
+    rq: T,
+    side: Side,
+) -> Option<Vec2<T>> {
+    let d = q - p;
+    let dd = d.norm_squared();
+    if !(dd > T::zero()) {
+        return None;
+    }
+    let a = (rp * rp - rq * rq + dd) / (T::c(2.0) * dd);
+    let h2 = rp * rp / dd - a * a;
+    if !(h2 >= T::zero()) {
+        return None;
+    }
+    let n = Vec2::new(-d.y, d.x) * h2.sqrt();
+    let s = match side {
+        Side::Left => T::one(),
+        Side::Right => -T::one(),
+    };
+    Some(p + d * a + n * s)
+}

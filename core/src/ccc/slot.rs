@@ -1,0 +1,431 @@
+//! One mode's model, its body map and its workspace, and what the twin reads from them:
+//! the equations of motion with the twin's inputs, the physical state of every link,
+//! the transmitted torques c6, c8 and the joint reactions.
+
+use super::build::{build, physical_link, BodyMap, BRANCHES, CRANK};
+use super::mode::{Clutch, Coordinates, Mode};
+use super::params::CccParams;
+use crate::dynamics::solve_accelerations;
+use crate::error::StepError;
+use crate::integrator::OdeSystem;
+use crate::kinematics::assemble;
+use crate::model::Model;
+use crate::motor::Motor;
+use crate::scalar::{cross, perp, rotate_cs, Real, Vec2};
+use crate::structomat::JointKind;
+use crate::transmission::evaluate;
+use crate::workspace::Workspace;
+use nalgebra::SVector;
+
+/// Length of the integrated state: `[q (2 slots), q̇ (2 slots), W_motor, W_load]`. The
+/// two works (J) are integrated with the motion, at the integrator's order, for the
+/// energy audit.
+pub(crate) const STATE: usize = 6;
+/// Offset of `q̇` in the state.
+pub(crate) const QD: usize = 2;
+/// Index of the motor's work.
+pub(crate) const W_MOTOR: usize = 4;
+/// Index of the work done against the load.
+pub(crate) const W_LOAD: usize = 5;
+
+/// The motor acting on the crank (link 1, reaction on the ground).
+#[derive(Clone, Copy, Debug)]
+pub enum MotorInput<T: Real> {
+    /// A torque, N·m, CCW positive (e.g. measured on the prototype), held over the step.
+    Torque(T),
+    /// A motor law of time, crank angle and crank speed, evaluated at every stage.
+    Law(Motor<T>),
+}
+
+impl<T: Real> MotorInput<T> {
+    /// The torque at time `t` (s), crank angle `theta` (rad) and speed `omega` (rad/s).
+    pub fn torque(&self, t: T, theta: T, omega: T) -> T {
+        match self {
+            MotorInput::Torque(v) => *v,
+            MotorInput::Law(m) => m.torque(t, theta, omega),
+        }
+    }
+}
+
+/// A link's physical state (SPEC 3's numbering), whatever the mode's model.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct LinkState<T: Real> {
+    /// Angle of the link frame (first joint to second), rad, CCW, unwrapped.
+    pub theta: T,
+    /// Angular speed, rad/s.
+    pub omega: T,
+    /// Angular acceleration, rad/s².
+    pub alpha: T,
+    /// Frame origin (the link's first joint), m.
+    pub origin: Vec2<T>,
+    /// Its velocity, m/s.
+    pub velocity: Vec2<T>,
+}
+
+/// A mode's model and workspace.
+#[derive(Clone, Debug)]
+pub(crate) struct Slot<T: Real> {
+    pub model: Model<T>,
+    pub map: BodyMap<T>,
+    pub ws: Workspace<T>,
+    pub mode: Mode,
+    pub coords: Coordinates,
+}
+
+impl<T: Real> Slot<T> {
+    /// Builds the model of `mode` driven by `coords` at the physical angles `pose`
+    /// (index 1..=8) and assembles it there. Returns the slot and its coordinates.
+    pub fn new(
+        params: &CccParams<T>,
+        mode: Mode,
+        coords: Coordinates,
+        pose: &[T; 9],
+        time: f64,
+    ) -> Result<(Self, [T; 2]), StepError> {
+        let (model, map) = build(params, mode, coords, pose).map_err(|_| StepError::NonFinite {
+            time,
+            what: "converter model at this pose",
+        })?;
+        let mut q = [T::zero(); 2];
+        for (qj, link) in q.iter_mut().zip(map.coord_link.iter()).take(map.dof) {
+            *qj = pose.get(*link as usize).copied().unwrap_or(T::zero());
+        }
+        let mut ws = Workspace::new();
+        assemble(&model, &mut ws, q.get(..map.dof).unwrap_or(&[]))
+            .map_err(|e| physical(&map, retime(e, time)))?;
+        Ok((
+            Slot {
+                model,
+                map,
+                ws,
+                mode,
+                coords,
+            },
+            q,
+        ))
+    }
+
+    /// Model body of physical link `p` (0: held still).
+    pub fn body(&self, p: usize) -> u8 {
+        self.map.body.get(p).copied().unwrap_or(0)
+    }
+
+    /// The body the shaft and the load act on (A modes), if any.
+    pub fn shaft_body(&self) -> Option<u8> {
+        let c = self.mode.clutches();
+        BRANCHES
+            .iter()
+            .zip(c.iter())
+            .find(|(_, c)| **c == Clutch::Engaged)
+            .map(|((_, lever), _)| self.body(*lever))
+    }
+
+    /// Evaluates the equations of motion at `(t, y)` with the inputs: kinematics, then
+    /// the motor torque on the crank (from its evaluated speed) and the load on the
+    /// engaged lever as applied moments, then `q̈`.
+    pub fn eval(
+        &mut self,
+        t: T,
+        y: &SVector<T, STATE>,
+        inputs: &Inputs<T>,
+        drive: T,
+    ) -> Result<(), StepError> {
+        let n = self.map.dof.min(2);
+        let s = y.as_slice();
+        let q = s.get(..n).unwrap_or(&[]);
+        let qd = s.get(QD..QD + n).unwrap_or(&[]);
+        evaluate(&self.model, &mut self.ws, q, qd, t.to_f64())?;
+        let crank = self
+            .ws
+            .body
+            .get(self.body(CRANK) as usize)
+            .copied()
+            .unwrap_or_default();
+        let tm = inputs.motor.torque(t, crank.theta, crank.omega);
+        if !(tm.finite() && inputs.load.finite()) {
+            return Err(StepError::NonFinite {
+                time: t.to_f64(),
+                what: "motor or load torque",
+            });
+        }
+        self.ws.applied_moment = [T::zero(); crate::config::MAX_BODIES];
+        let crank_body = self.body(CRANK) as usize;
+        if let Some(m) = self.ws.applied_moment.get_mut(crank_body) {
+            *m = tm;
+        }
+        if let Some(b) = self.shaft_body() {
+            // The load opposes the shaft's rotation, which is in the drive direction.
+            if let Some(m) = self.ws.applied_moment.get_mut(b as usize) {
+                *m -= drive * inputs.load;
+            }
+        }
+        solve_accelerations(&self.model, &mut self.ws, t)
+    }
+
+    /// `dy` of the state after [`Slot::eval`]: `q̇`, `q̈`, motor power, load power.
+    pub fn rates(&self, y: &SVector<T, STATE>, inputs: &Inputs<T>, drive: T) -> SVector<T, STATE> {
+        let mut dy = SVector::<T, STATE>::zeros();
+        let n = self.map.dof.min(2);
+        for k in 0..n {
+            dy[k] = y[QD + k];
+            dy[QD + k] = self.ws.qdd.get(k).copied().unwrap_or(T::zero());
+        }
+        let crank = self.body(CRANK) as usize;
+        let w1 = self.ws.body.get(crank).map_or(T::zero(), |b| b.omega);
+        dy[W_MOTOR] = self
+            .ws
+            .applied_moment
+            .get(crank)
+            .copied()
+            .unwrap_or(T::zero())
+            * w1;
+        if let Some(b) = self.shaft_body() {
+            let ws = self.ws.body.get(b as usize).map_or(T::zero(), |b| b.omega);
+            dy[W_LOAD] = inputs.load * drive * ws;
+        }
+        dy
+    }
+
+    /// Physical state of links 1..=8 (index 0 unused) at the workspace's evaluation;
+    /// angles as the model holds them (the twin unwraps them).
+    pub fn links(&self, params: &CccParams<T>) -> [LinkState<T>; 9] {
+        let mut out = [LinkState::default(); 9];
+        for (p, o) in out.iter_mut().enumerate().skip(1) {
+            let b = self.body(p);
+            let off = self.map.offset.get(p).copied().unwrap_or(T::zero());
+            if b == 0 {
+                // A locked lever: at rest about H.
+                *o = LinkState {
+                    theta: off,
+                    origin: params.h,
+                    ..LinkState::default()
+                };
+                continue;
+            }
+            let s = self.ws.body.get(b as usize).copied().unwrap_or_default();
+            *o = LinkState {
+                theta: s.theta + off,
+                omega: s.omega,
+                alpha: s.alpha,
+                origin: s.o,
+                velocity: s.v,
+            };
+        }
+        out
+    }
+
+    /// The force on lever `lever` (6 or 8) from its rod at its pin (G or I), N, from
+    /// the last kinetostatics; zero if the model has no such joint.
+    fn rod_force_on_lever(&self, rod: usize, lever: usize) -> Vec2<T> {
+        let (br, bl) = (self.body(rod), self.body(lever));
+        for (g, r) in self.model.groups().iter().zip(self.ws.reactions.iter()) {
+            for (jt, re) in g.joints.iter().zip(r.iter()) {
+                if jt.kind != JointKind::Revolute {
+                    continue;
+                }
+                if jt.i == br && jt.j == bl {
+                    return -re.force;
+                }
+                if jt.i == bl && jt.j == br {
+                    return re.force;
+                }
+            }
+        }
+        Vec2::zeros()
+    }
+
+    /// The transmitted torques `[c6, c8]` (SPEC 3), N·m, positive in the drive
+    /// direction, after the kinetostatics: for a locked or engaged lever, the moment
+    /// about H of its rod's force and its weight, minus `I_H α` when it turns; 0 for a
+    /// free lever.
+    pub fn clutch_torques(&self, params: &CccParams<T>, links: &[LinkState<T>; 9]) -> [T; 2] {
+        let d = params.drive.sign::<T>();
+        let mut c = [T::zero(); 2];
+        for ((ck, (rod, lever)), clutch) in c.iter_mut().zip(BRANCHES).zip(self.mode.clutches()) {
+            if clutch == Clutch::Free {
+                continue;
+            }
+            let s = links.get(lever).copied().unwrap_or_default();
+            let len = params.link(lever).length;
+            let u = Vec2::new(s.theta.cos(), s.theta.sin());
+            let tip = u * len;
+            let cog = u * (len * T::c(0.5));
+            let weight = params.gravity * params.link(lever).mass;
+            let m = cross(&tip, &self.rod_force_on_lever(rod, lever)) + cross(&cog, &weight);
+            *ck = d * (m - params.lever_inertia_about_h(lever) * s.alpha);
+        }
+        c
+    }
+
+    /// Physical joint reactions (see [`JOINTS`]) from the last kinetostatics: force on
+    /// the first link of each pair from the second, N. The shaft's forces on the levers
+    /// come from each lever's own equation of motion about the fixed H.
+    pub fn joint_reactions(
+        &self,
+        params: &CccParams<T>,
+        links: &[LinkState<T>; 9],
+    ) -> [Vec2<T>; 11] {
+        let mut out = [Vec2::zeros(); 11];
+        let phys = |b: u8| self.map.phys.get(b as usize).copied().unwrap_or(0);
+        for (g, r) in self.model.groups().iter().zip(self.ws.reactions.iter()) {
+            for (jt, re) in g.joints.iter().zip(r.iter()) {
+                if jt.kind != JointKind::Revolute {
+                    continue;
+                }
+                // A rod pinned to the ground is pinned to its locked lever.
+                let locked_lever = |rod: u8| {
+                    BRANCHES
+                        .iter()
+                        .find(|(r, _)| *r as u8 == rod)
+                        .map_or(0, |(_, l)| *l as u8)
+                };
+                let (mut pi, mut pj) = (phys(jt.i), phys(jt.j));
+                if pj == 0 {
+                    pj = locked_lever(pi);
+                } else if pi == 0 {
+                    pi = locked_lever(pj);
+                }
+                for (k, (a, b)) in JOINTS.iter().enumerate() {
+                    if (pi, pj) == (*a, *b) {
+                        out[k] = re.force;
+                    } else if (pi, pj) == (*b, *a) {
+                        out[k] = -re.force;
+                    }
+                }
+            }
+        }
+        // Lever k about the fixed H: m a_G = R_rod + R_H + m g.
+        for (slot, (tip_joint, lever)) in [(9usize, (7usize, 6usize)), (10, (8, 8))] {
+            let s = links.get(lever).copied().unwrap_or_default();
+            let b = params.link(lever);
+            let r = Vec2::new(s.theta.cos(), s.theta.sin()) * (b.length * T::c(0.5));
+            let a_g = perp(&r) * s.alpha - r * (s.omega * s.omega);
+            let on_lever_from_rod = out.get(tip_joint).copied().unwrap_or_default();
+            if let Some(o) = out.get_mut(slot) {
+                *o = a_g * b.mass - on_lever_from_rod - params.gravity * b.mass;
+            }
+        }
+        out
+    }
+
+    /// Smallest normalized determinant over the sequence's groups at the last
+    /// evaluation (1 for a well-conditioned sequence, 0 at a dead point).
+    pub fn conditioning(&self) -> T {
+        self.ws
+            .group
+            .iter()
+            .take(self.model.groups().len())
+            .fold(T::one(), |m, g| m.min(g.conditioning))
+    }
+}
+
+/// The physical joints, as `(i, j)`: the reaction reported is the force on link `i`
+/// from link `j` (0: the ground or the shaft). A, B, C, E, F, D (rod 5), D (rod 7), G,
+/// I, H (lever 6), H (lever 8).
+pub const JOINTS: [(u8, u8); 11] = [
+    (1, 0),
+    (2, 1),
+    (3, 2),
+    (3, 4),
+    (4, 0),
+    (5, 3),
+    (7, 3),
+    (6, 5),
+    (8, 7),
+    (6, 0),
+    (8, 0),
+];
+
+/// Names of [`JOINTS`], for CSV headers.
+pub const JOINT_NAMES: [&str; 11] = ["A", "B", "C", "E", "F", "D5", "D7", "G", "I", "H6", "H8"];
+
+/// What the twin is given each step.
+#[derive(Clone, Copy, Debug)]
+pub struct Inputs<T: Real> {
+    /// The motor on the crank.
+    pub motor: MotorInput<T>,
+    /// The load's resistive torque on the shaft T_r ≥ 0, N·m.
+    pub load: T,
+    /// A measured crank angle (rad) and speed (rad/s) to compare against.
+    pub measured: Option<(T, T)>,
+}
+
+/// The ODE of a slot with its inputs, for the integrator.
+pub(crate) struct Equations<'a, T: Real> {
+    pub slot: &'a mut Slot<T>,
+    pub inputs: &'a Inputs<T>,
+    pub drive: T,
+}
+
+impl<T: Real> OdeSystem<T, STATE> for Equations<'_, T> {
+    type Error = StepError;
+    fn eval(
+        &mut self,
+        t: T,
+        y: &SVector<T, STATE>,
+        dy: &mut SVector<T, STATE>,
+    ) -> Result<(), StepError> {
+        self.slot.eval(t, y, self.inputs, self.drive)?;
+        *dy = self.slot.rates(y, self.inputs, self.drive);
+        Ok(())
+    }
+}
+
+/// A physical link's mass, its moment of inertia about its COG and the COG in its
+/// frame (the rocker carries the oscillating mass).
+pub(crate) fn mass_properties<T: Real>(params: &CccParams<T>, p: usize) -> (T, T, Vec2<T>) {
+    let l = physical_link(params, p);
+    (l.mass, l.inertia, l.cog)
+}
+
+/// Kinetic and potential energy of the physical links (and of the shaft turning at
+/// `shaft_speed`), J: computed from the physical state, independently of the mode's
+/// model.
+pub(crate) fn physical_energy<T: Real>(
+    params: &CccParams<T>,
+    links: &[LinkState<T>; 9],
+    shaft_speed: T,
+) -> (T, T) {
+    let half = T::c(0.5);
+    let (mut k, mut u) = (
+        half * params.shaft_inertia * shaft_speed * shaft_speed,
+        T::zero(),
+    );
+    for (p, s) in links.iter().enumerate().skip(1) {
+        let (m, i, c) = mass_properties(params, p);
+        let r = rotate_cs(s.theta.cos(), s.theta.sin(), &c);
+        let v = s.velocity + perp(&r) * s.omega;
+        k += half * (m * v.norm_squared() + i * s.omega * s.omega);
+        u -= m * params.gravity.dot(&(s.origin + r));
+    }
+    (k, u)
+}
+
+fn retime(e: StepError, time: f64) -> StepError {
+    match e {
+        StepError::Group { group, fault, .. } => StepError::Group { time, group, fault },
+        StepError::SingularMassMatrix { .. } => StepError::SingularMassMatrix { time },
+        StepError::NonFinite { what, .. } => StepError::NonFinite { time, what },
+    }
+}
+
+/// `e` with its group named in physical link numbers (SPEC 3's), ascending.
+pub(crate) fn physical<T: Real>(map: &BodyMap<T>, e: StepError) -> StepError {
+    match e {
+        StepError::Group {
+            time,
+            mut group,
+            fault,
+        } => {
+            let n = (group.count as usize).min(group.links.len());
+            for l in group.links.iter_mut().take(n) {
+                *l = map.phys.get(*l as usize).copied().unwrap_or(*l);
+            }
+            if let Some(s) = group.links.get_mut(..n) {
+                s.sort_unstable();
+            }
+            StepError::Group { time, group, fault }
+        }
+        e => e,
+    }
+}

@@ -1,0 +1,1384 @@
+//! The twin: fixed-step DP5 on the current mode's model, with the mechanical diode's
+//! events located inside the step from the dense output, the new mode chosen by SPEC 3's
+//! consistency conditions, plastic impacts, and coordinate switches at dead points.
+//!
+//! Work per step is bounded: at most [`MAX_EVENTS_PER_STEP`] events, each located in at
+//! most [`MAX_LOCATE_ITER`] evaluations and settled by at most 7 candidate modes; at
+//! most [`MAX_RETRIES`] coordinate switches after a failed sub-step. When a step holds
+//! more events than the bound, the rest of the step is integrated in the last mode
+//! chosen and the pending sign changes are handled at the start of the next step (the
+//! event functions are re-checked there): no event is lost, it is late by under one
+//! step, and the twin cannot chatter.
+
+use super::build::{initial_pose, BRANCHES, CRANK};
+use super::mode::{Clutch, Coordinates, Mode};
+use super::params::CccParams;
+use super::slot::{
+    physical, physical_energy, Equations, Inputs, LinkState, Slot, QD, STATE, W_LOAD, W_MOTOR,
+};
+use crate::dynamics::finish_accelerations;
+use crate::error::{GroupFault, GroupId, ModelError, StepError};
+use crate::integrator::Dp5;
+use crate::kinetostatics::reactions;
+use crate::scalar::{Real, Vec2};
+use core::fmt;
+use nalgebra::{SMatrix, SVector};
+
+/// Events per step at most (see the module docs for what happens past it).
+pub const MAX_EVENTS_PER_STEP: usize = 4;
+/// Evaluations spent locating one event at most (Illinois regula falsi).
+pub const MAX_LOCATE_ITER: usize = 16;
+/// Coordinate switches after a failed sub-step at most.
+pub const MAX_RETRIES: usize = 2;
+/// An event is located to this fraction of the step (1e-12 s at h = 1e-4 s).
+const THETA_TOL: f64 = 1e-8;
+
+/// Settings fixed at start.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TwinSettings<T> {
+    /// The fixed step, s.
+    pub h: T,
+    /// `false`: no clutch at all (SPEC 3's free mode, thesis 7.1), the levers swing freely.
+    pub clutch: bool,
+    /// Initial crank angle q1, rad.
+    pub crank: T,
+    /// Initial swing-link angle q2, rad.
+    pub swing: T,
+    /// Initial crank speed, rad/s.
+    pub crank_speed: T,
+    /// Initial swing-link speed, rad/s.
+    pub swing_speed: T,
+    /// Under this normalized determinant of a group, other coordinate choices are tried
+    /// (a dead point of the coordinates is coming); one is taken if it is at least 1.5
+    /// times better.
+    pub switch_below: T,
+}
+
+impl<T: Real> TwinSettings<T> {
+    /// SPEC 3's initial state (q1 = 105°, q2 = 90°, at rest) with the diode, at step `h`.
+    pub fn reference(h: T) -> Self {
+        TwinSettings {
+            h,
+            clutch: true,
+            crank: T::c(105f64.to_radians()),
+            swing: T::c(90f64.to_radians()),
+            crank_speed: T::zero(),
+            swing_speed: T::zero(),
+            switch_below: T::c(0.2),
+        }
+    }
+}
+
+/// What made the mode change.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum EventKind {
+    /// The consistent mode at the start.
+    Start,
+    /// The inputs changed and the mode was no longer consistent.
+    Inputs,
+    /// A free lever (6 or 8) reached the shaft's speed in the drive direction.
+    Catch(u8),
+    /// A locked or engaged lever's transmitted torque fell to 0.
+    Release(u8),
+    /// The locked levers' transmitted torque rose to the load T_r.
+    Breakaway,
+    /// The shaft's speed fell to 0.
+    ShaftStop,
+}
+
+impl EventKind {
+    /// A short name for logs.
+    pub fn name(self) -> &'static str {
+        match self {
+            EventKind::Start => "start",
+            EventKind::Inputs => "inputs",
+            EventKind::Catch(6) => "catch6",
+            EventKind::Catch(_) => "catch8",
+            EventKind::Release(6) => "release6",
+            EventKind::Release(_) => "release8",
+            EventKind::Breakaway => "breakaway",
+            EventKind::ShaftStop => "shaft-stop",
+        }
+    }
+}
+
+/// A mode change.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Event<T> {
+    /// Time, s.
+    pub time: T,
+    /// What fired.
+    pub kind: EventKind,
+    /// Mode before.
+    pub from: Mode,
+    /// Mode chosen.
+    pub to: Mode,
+    /// Transmitted torques `[c6, c8]` in the new mode, N·m.
+    pub c: [T; 2],
+    /// Kinetic energy lost in the plastic impact, J (0 without one).
+    pub impact_loss: T,
+    /// Relative speed of the levers projected away by the impact, rad/s.
+    pub mismatch: T,
+}
+
+/// A change of independent coordinates.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CoordinateSwitch<T> {
+    /// Time, s.
+    pub time: T,
+    /// The mode.
+    pub mode: Mode,
+    /// Coordinates before.
+    pub from: Coordinates,
+    /// Coordinates after.
+    pub to: Coordinates,
+    /// Smallest normalized determinant of the sequence before, and after.
+    pub conditioning: [T; 2],
+}
+
+/// A group that failed in one coordinate choice.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Failure {
+    /// The coordinate choice.
+    pub coords: Coordinates,
+    /// The group, in physical link numbers.
+    pub group: GroupId,
+    /// Why.
+    pub fault: GroupFault,
+}
+
+/// Why the twin could not be set up or step. A failed step leaves the last good state.
+#[derive(Clone, Debug, PartialEq)]
+pub enum TwinError {
+    /// A parameter is invalid.
+    Model(ModelError),
+    /// A setting or an input is invalid.
+    Setting(&'static str),
+    /// An evaluation failed (not a group: a non-finite input, a singular mass matrix).
+    Step(StepError),
+    /// A singularity of the mechanism itself: every coordinate choice of the mode fails.
+    Mechanism {
+        /// Time, s.
+        time: f64,
+        /// The mode.
+        mode: Mode,
+        /// The group that fails in each choice.
+        failures: heapless::Vec<Failure, 3>,
+    },
+    /// A turning shaft with J_s > 0 would leave both levers and coast: not modelled.
+    Coasting {
+        /// Time, s.
+        time: f64,
+    },
+}
+
+impl fmt::Display for TwinError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            TwinError::Model(e) => write!(f, "converter: {e}"),
+            TwinError::Setting(s) => write!(f, "converter: {s}"),
+            TwinError::Step(e) => write!(f, "{e}"),
+            TwinError::Mechanism {
+                time,
+                mode,
+                failures,
+            } => {
+                write!(
+                    f,
+                    "t = {time:.6} s: singular configuration of the mechanism in mode {mode}: "
+                )?;
+                for (k, x) in failures.iter().enumerate() {
+                    let sep = if k == 0 { "" } else { "; " };
+                    write!(f, "{sep}{} coordinates: {} {}", x.coords, x.group, x.fault)?;
+                }
+                Ok(())
+            }
+            TwinError::Coasting { time } => write!(
+                f,
+                "t = {time:.6} s: the shaft would coast free of both levers (J_s > 0), which is not modelled"
+            ),
+        }
+    }
+}
+
+impl core::error::Error for TwinError {}
+
+impl From<ModelError> for TwinError {
+    fn from(e: ModelError) -> Self {
+        TwinError::Model(e)
+    }
+}
+
+/// The energy audit (SPEC 3): `motor work = Δ(kinetic + potential) + load work + impact
+/// losses`, each term in J since the start.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Audit<T> {
+    /// Work of the motor on the crank.
+    pub motor_work: T,
+    /// Work done against the load on the shaft.
+    pub load_work: T,
+    /// Kinetic energy lost in plastic impacts.
+    pub impact_loss: T,
+    /// Kinetic energy now (links and shaft).
+    pub kinetic: T,
+    /// Potential energy now (gravity).
+    pub potential: T,
+    /// Kinetic plus potential energy at the start.
+    pub initial: T,
+}
+
+impl<T: Real> Audit<T> {
+    /// `motor work - Δ(kinetic + potential) - load work - impact losses`, J.
+    pub fn residual(&self) -> T {
+        self.motor_work
+            - (self.kinetic + self.potential - self.initial)
+            - self.load_work
+            - self.impact_loss
+    }
+}
+
+/// Which event functions are watched, their values: `[catch6, catch8, release6,
+/// release8, breakaway, shaft stop]`; an event fires when its function goes from ≤ 0 to
+/// > 0 over a step.
+type Guards<T> = [Option<T>; 6];
+
+/// The twin of one converter.
+#[derive(Clone, Debug)]
+pub struct Twin<T: Real> {
+    params: CccParams<T>,
+    settings: TwinSettings<T>,
+    drive: T,
+    slot: Slot<T>,
+    cand: Slot<T>,
+    reference: Slot<T>,
+    backup: Slot<T>,
+    dp5: Dp5<T, STATE>,
+    y: SVector<T, STATE>,
+    t: T,
+    steps: u64,
+    inputs: Inputs<T>,
+    links: [LinkState<T>; 9],
+    shaft_angle: T,
+    c: [T; 2],
+    joints: [Vec2<T>; 11],
+    guards: Guards<T>,
+    audit: Audit<T>,
+    events: heapless::Vec<Event<T>, MAX_EVENTS_PER_STEP>,
+    switches: heapless::Vec<CoordinateSwitch<T>, { MAX_RETRIES + 1 }>,
+    candidates: heapless::Vec<(Mode, T), 8>,
+}
+
+/// The working state of a step, committed only when the whole step succeeds.
+struct Work<T: Real> {
+    t: T,
+    y: SVector<T, STATE>,
+    impact: T,
+    switched: bool,
+}
+
+impl<T: Real> Twin<T> {
+    /// A twin of `params` from `settings`' initial state, its first mode chosen by the
+    /// consistency conditions under `inputs`.
+    pub fn new(
+        params: CccParams<T>,
+        settings: TwinSettings<T>,
+        inputs: Inputs<T>,
+    ) -> Result<Self, TwinError> {
+        params.validate()?;
+        if !(settings.h.finite() && settings.h > T::zero()) {
+            return Err(TwinError::Setting("step h must be positive and finite"));
+        }
+        if !(settings.switch_below.finite()
+            && settings.switch_below > T::zero()
+            && settings.switch_below < T::one())
+        {
+            return Err(TwinError::Setting("switch_below must be in (0, 1)"));
+        }
+        check_inputs(&inputs)?;
+        let pose =
+            initial_pose(&params, settings.crank, settings.swing).ok_or(TwinError::Setting(
+                "the converter cannot assemble at the initial crank and swing angles",
+            ))?;
+        let mode = if settings.clutch {
+            Mode::I0
+        } else {
+            Mode::Free
+        };
+        let (slot, q) = best_slot(&params, mode, &pose, 0.0)?;
+        let mut y = SVector::<T, STATE>::zeros();
+        // Initial link speeds: those of the crank and the swing link (the others follow
+        // from the kinematics; the first choice of a 2-DOF mode is crank + swing link).
+        let mut omega = [T::zero(); 9];
+        omega[CRANK] = settings.crank_speed;
+        omega[4] = settings.swing_speed;
+        load_state(&slot, &q, &omega, &mut y);
+        if y.iter().any(|v| !v.finite()) {
+            return Err(TwinError::Setting("initial state is not finite"));
+        }
+        let mut twin = Twin {
+            drive: params.drive.sign(),
+            params,
+            settings,
+            cand: slot.clone(),
+            reference: slot.clone(),
+            backup: slot.clone(),
+            slot,
+            dp5: Dp5::new(),
+            y,
+            t: T::zero(),
+            steps: 0,
+            inputs,
+            links: [LinkState::default(); 9],
+            shaft_angle: T::zero(),
+            c: [T::zero(); 2],
+            joints: [Vec2::zeros(); 11],
+            guards: [None; 6],
+            audit: Audit::default(),
+            events: heapless::Vec::new(),
+            switches: heapless::Vec::new(),
+            candidates: heapless::Vec::new(),
+        };
+        for (p, l) in twin.links.iter_mut().enumerate() {
+            l.theta = pose[p];
+        }
+        let mut w = Work {
+            t: T::zero(),
+            y: twin.y,
+            impact: T::zero(),
+            switched: false,
+        };
+        twin.finish(&mut w, &inputs)?;
+        if settings.clutch {
+            twin.choose(&mut w, EventKind::Start, &inputs)?;
+        }
+        twin.y = w.y;
+        twin.commit(&w, &inputs)?;
+        let (k, u) = (twin.audit.kinetic, twin.audit.potential);
+        twin.audit.initial = k + u;
+        Ok(twin)
+    }
+
+    /// One step of `h` under `inputs` (held over the step). On error the twin keeps the
+    /// state of the last good step.
+    pub fn step(&mut self, inputs: &Inputs<T>) -> Result<(), TwinError> {
+        check_inputs(inputs)?;
+        self.events.clear();
+        self.switches.clear();
+        let changed = !same_inputs(&self.inputs, inputs);
+        if changed {
+            self.dp5.invalidate();
+        }
+        let mut w = Work {
+            t: self.t,
+            y: self.y,
+            impact: T::zero(),
+            switched: false,
+        };
+        let result = self.advance(&mut w, inputs, changed);
+        match result {
+            Ok(()) => {
+                self.y = w.y;
+                self.steps += 1;
+                self.commit(&w, inputs)?;
+                self.inputs = *inputs;
+                Ok(())
+            }
+            Err(e) => {
+                self.restore(w.switched);
+                Err(e)
+            }
+        }
+    }
+
+    fn advance(
+        &mut self,
+        w: &mut Work<T>,
+        inputs: &Inputs<T>,
+        changed: bool,
+    ) -> Result<(), TwinError> {
+        let t_end = T::c((self.steps + 1) as f64) * self.settings.h;
+        if changed {
+            // Inputs changed: re-evaluate here and see whether the mode still holds.
+            self.finish(w, inputs)?;
+            if self.settings.clutch && self.guards.iter().flatten().any(|g| *g > T::zero()) {
+                self.backup_once(w);
+                self.choose(w, EventKind::Inputs, inputs)?;
+            }
+        }
+        let mut retries = 0;
+        let mut events = 0;
+        while w.t < t_end {
+            if self.slot.mode == Mode::Jam {
+                // At rest: nothing moves until the inputs make another mode consistent.
+                w.t = t_end;
+                self.finish(w, inputs)?;
+                break;
+            }
+            let t0 = w.t;
+            let y0 = w.y;
+            let saved = self.group_unknowns();
+            let h = t_end - t0;
+            let mut sys = Equations {
+                slot: &mut self.slot,
+                inputs,
+                drive: self.drive,
+            };
+            match self.dp5.step(&mut sys, &mut w.t, &mut w.y, h) {
+                Ok(_) => {}
+                Err(e) => {
+                    self.set_group_unknowns(&saved);
+                    w.t = t0;
+                    w.y = y0;
+                    if retries >= MAX_RETRIES || !matches!(e, StepError::Group { .. }) {
+                        return Err(self.physical_error(e));
+                    }
+                    retries += 1;
+                    self.backup_once(w);
+                    self.finish(w, inputs)?;
+                    self.switch_coordinates(w, inputs, Some(e))?;
+                    continue;
+                }
+            }
+            let g0 = self.guards;
+            self.finish(w, inputs)?;
+            let fired = fired(&g0, &self.guards);
+            if fired == 0 || events >= MAX_EVENTS_PER_STEP || !self.settings.clutch {
+                break;
+            }
+            events += 1;
+            let (theta, kind) = self.locate(w, t0, h, &g0, fired, inputs)?;
+            let mut ye = SVector::<T, STATE>::zeros();
+            self.dp5.dense(theta, &mut ye);
+            w.t = t0 + theta * h;
+            w.y = ye;
+            self.backup_once(w);
+            self.finish(w, inputs)?;
+            self.choose(w, kind, inputs)?;
+        }
+        if self.slot.mode != Mode::Jam && self.slot.conditioning() < self.settings.switch_below {
+            self.backup_once(w);
+            self.switch_coordinates(w, inputs, None)?;
+        }
+        if !same_bits(w.t, t_end) {
+            w.t = t_end;
+            self.dp5.invalidate();
+        }
+        Ok(())
+    }
+
+    /// Keeps the pre-step slot the first time a step changes it.
+    fn backup_once(&mut self, w: &mut Work<T>) {
+        if !w.switched {
+            self.backup.clone_from(&self.slot);
+            w.switched = true;
+        }
+    }
+
+    fn restore(&mut self, switched: bool) {
+        if switched {
+            core::mem::swap(&mut self.slot, &mut self.backup);
+        }
+        self.dp5.invalidate();
+        let mut w = Work {
+            t: self.t,
+            y: self.y,
+            impact: T::zero(),
+            switched: false,
+        };
+        // It evaluated at this very state before: this cannot fail, and if it did the
+        // workspace would merely hold the failed evaluation.
+        let inputs = self.inputs;
+        let _ = self.finish(&mut w, &inputs);
+    }
+
+    fn group_unknowns(&self) -> [[T; crate::config::MAX_GROUP_VARS]; crate::config::MAX_GROUPS] {
+        core::array::from_fn(|k| self.slot.ws.group.get(k).map_or([T::zero(); 4], |g| g.x))
+    }
+
+    fn set_group_unknowns(
+        &mut self,
+        x: &[[T; crate::config::MAX_GROUP_VARS]; crate::config::MAX_GROUPS],
+    ) {
+        for (g, x) in self.slot.ws.group.iter_mut().zip(x.iter()) {
+            g.x = *x;
+        }
+    }
+
+    /// Evaluates the current slot at `w`'s state: equations of motion, accelerations,
+    /// kinetostatics, the event functions.
+    fn finish(&mut self, w: &mut Work<T>, inputs: &Inputs<T>) -> Result<(), TwinError> {
+        self.slot
+            .eval(w.t, &w.y, inputs, self.drive)
+            .map_err(|e| self.physical_error(e))?;
+        finish_accelerations(&self.slot.model, &mut self.slot.ws);
+        reactions(&self.slot.model, &mut self.slot.ws, w.t.to_f64())
+            .map_err(|e| self.physical_error(e))?;
+        let links = self.slot.links(&self.params);
+        self.c = self.slot.clutch_torques(&self.params, &links);
+        self.guards = self.guards_of(&self.slot, &links, &self.c, inputs);
+        Ok(())
+    }
+
+    /// The event functions of `slot`'s mode at its evaluated state.
+    fn guards_of(
+        &self,
+        slot: &Slot<T>,
+        links: &[LinkState<T>; 9],
+        c: &[T; 2],
+        inputs: &Inputs<T>,
+    ) -> Guards<T> {
+        let mut g = [None; 6];
+        if !self.settings.clutch {
+            return g;
+        }
+        let d = self.drive;
+        let mode = slot.mode;
+        let shaft = shaft_speed(mode, links);
+        let mut locked = T::zero();
+        let mut any_locked = false;
+        for (k, ((_, lever), clutch)) in BRANCHES.iter().zip(mode.clutches()).enumerate() {
+            let w = links.get(*lever).map_or(T::zero(), |s| s.omega);
+            match clutch {
+                Clutch::Free => g[k] = Some(d * (w - shaft)),
+                Clutch::Locked => {
+                    g[2 + k] = Some(-c[k]);
+                    locked += c[k];
+                    any_locked = true;
+                }
+                Clutch::Engaged => g[2 + k] = Some(-c[k]),
+            }
+        }
+        if any_locked {
+            g[4] = Some(locked - inputs.load);
+        }
+        if mode.shaft_turning() {
+            g[5] = Some(-d * shaft);
+        }
+        g
+    }
+
+    /// Locates the first crossing among the fired event functions inside the last
+    /// DP5 step (`t0`, `h`) by Illinois regula falsi on the dense output; returns the
+    /// fraction of the step just past the event and which event it is.
+    fn locate(
+        &mut self,
+        w: &mut Work<T>,
+        t0: T,
+        h: T,
+        g0: &Guards<T>,
+        fired: u8,
+        inputs: &Inputs<T>,
+    ) -> Result<(T, EventKind), TwinError> {
+        let pick = |g: &Guards<T>| -> (T, usize) {
+            let mut best = (T::c(f64::NEG_INFINITY), 0);
+            for (k, v) in g.iter().enumerate() {
+                if fired & (1 << k) != 0 {
+                    if let Some(v) = v {
+                        if *v > best.0 {
+                            best = (*v, k);
+                        }
+                    }
+                }
+            }
+            best
+        };
+        let (mut lo, mut hi) = (T::zero(), T::one());
+        let (mut glo, _) = pick(g0);
+        let (mut ghi, mut which) = pick(&self.guards);
+        let mut side = 0i8;
+        let mut y = SVector::<T, STATE>::zeros();
+        for _ in 0..MAX_LOCATE_ITER {
+            if hi - lo <= T::c(THETA_TOL) {
+                break;
+            }
+            let mut th = (lo * ghi - hi * glo) / (ghi - glo);
+            let margin = (hi - lo) * T::c(0.01);
+            if !(th > lo + margin && th < hi - margin) {
+                th = (lo + hi) * T::c(0.5);
+            }
+            self.dp5.dense(th, &mut y);
+            w.t = t0 + th * h;
+            w.y = y;
+            self.finish(w, inputs)?;
+            let (g, k) = pick(&self.guards);
+            if g > T::zero() {
+                hi = th;
+                ghi = g;
+                which = k;
+                if side == 1 {
+                    glo *= T::c(0.5);
+                }
+                side = 1;
+            } else {
+                lo = th;
+                glo = g;
+                if side == -1 {
+                    ghi *= T::c(0.5);
+                }
+                side = -1;
+            }
+        }
+        let kind = match which {
+            0 => EventKind::Catch(6),
+            1 => EventKind::Catch(8),
+            2 => EventKind::Release(6),
+            3 => EventKind::Release(8),
+            4 => EventKind::Breakaway,
+            _ => EventKind::ShaftStop,
+        };
+        Ok((hi, kind))
+    }
+
+    /// Physical angles of the slot's links, unwrapped against the last committed ones.
+    fn slot_links_unwrapped(&self) -> [T; 9] {
+        let links = self.slot.links(&self.params);
+        let mut out = [T::zero(); 9];
+        for (p, o) in out.iter_mut().enumerate().skip(1) {
+            *o = unwrap_near(links[p].theta, self.links[p].theta);
+        }
+        out
+    }
+
+    /// Chooses the consistent mode at `w`'s state (the current slot evaluated there)
+    /// after event `kind`, projects the speeds if the new constraints need it (plastic
+    /// impact), and switches to it.
+    fn choose(
+        &mut self,
+        w: &mut Work<T>,
+        kind: EventKind,
+        inputs: &Inputs<T>,
+    ) -> Result<(), TwinError> {
+        let time = w.t.to_f64();
+        let from = self.slot.mode;
+        let pose = self.slot_links_unwrapped();
+        let links = self.slot.links(&self.params);
+        let d = self.drive;
+        let shaft = shaft_speed(from, &links);
+        let scale_w = links.iter().fold(T::one(), |m, s| m.max(s.omega.abs()));
+        let tol_w = T::c(1e-6) * scale_w;
+        // Which levers touch the shaft (may lock or engage), and the shaft's options.
+        let mut contact = [false; 2];
+        for (k, ((_, lever), clutch)) in BRANCHES.iter().zip(from.clutches()).enumerate() {
+            let rel = links[*lever].omega - shaft;
+            contact[k] = clutch != Clutch::Free
+                || (rel.abs() <= tol_w)
+                || kind == EventKind::Catch(*lever as u8);
+        }
+        let held_possible =
+            !from.shaft_turning() || kind == EventKind::ShaftStop || shaft.abs() <= tol_w;
+        let mut cands: heapless::Vec<(u8, Mode), 8> = heapless::Vec::new();
+        for turning in [false, true] {
+            if !turning && !held_possible {
+                continue;
+            }
+            let hold = if turning {
+                Clutch::Engaged
+            } else {
+                Clutch::Locked
+            };
+            let options = |k: usize| {
+                if contact[k] {
+                    [Clutch::Free, hold]
+                } else {
+                    [Clutch::Free, Clutch::Free]
+                }
+            };
+            for c6 in options(0) {
+                for c8 in options(1) {
+                    let Some(m) = Mode::from_clutches([c6, c8], turning) else {
+                        continue;
+                    };
+                    if !cands.iter().any(|(_, x)| *x == m) {
+                        let _ = cands.push((preference(from, m, kind), m));
+                    }
+                }
+            }
+        }
+        // Insertion sort by preference (stable: ties keep the enumeration order).
+        for i in 1..cands.len() {
+            let mut j = i;
+            while j > 0 && cands[j - 1].0 > cands[j].0 {
+                cands.swap(j - 1, j);
+                j -= 1;
+            }
+        }
+        // Generalized momentum space of the unconstrained diode: the 2-DOF model, plus the
+        // shaft when it has inertia.
+        let (reference, qr) = best_slot(&self.params, Mode::I0, &pose, time)?;
+        self.reference = reference;
+        let mut yr = SVector::<T, STATE>::zeros();
+        for k in 0..2 {
+            yr[k] = qr[k];
+            yr[QD + k] = links[self.reference.map.coord_link[k] as usize].omega;
+        }
+        self.reference
+            .eval(w.t, &yr, inputs, d)
+            .map_err(|e| self.physical_error(e))?;
+        let js = self.params.shaft_inertia;
+        let with_shaft = js > T::zero();
+        let mut mass = SMatrix::<T, 3, 3>::identity();
+        for r in 0..2 {
+            for c in 0..2 {
+                mass[(r, c)] = self.reference.ws.mass_q[(r, c)];
+            }
+        }
+        if with_shaft {
+            mass[(2, 2)] = js;
+        }
+        let u = SVector::<T, 3>::new(
+            yr[QD],
+            yr[QD + 1],
+            if with_shaft { shaft } else { T::zero() },
+        );
+        let lever_row = |slot: &Slot<T>, lever: usize| -> SVector<T, 3> {
+            let b = slot.body(lever) as usize;
+            let r = 3 * (b.max(1) - 1) + 2;
+            SVector::<T, 3>::new(slot.ws.v[(r, 0)], slot.ws.v[(r, 1)], T::zero())
+        };
+        let mut best: Option<(T, Mode)> = None;
+        let mut chosen = None;
+        self.candidates.clear();
+        for (_, m) in cands.iter().copied() {
+            let rows = constraint_rows(m, with_shaft, |lever| lever_row(&self.reference, lever));
+            let Some((u_plus, loss)) = project(&mass, &u, &rows) else {
+                let _ = self.candidates.push((m, T::c(f64::INFINITY)));
+                continue; // rank-deficient constraints
+            };
+            let violation = self.try_candidate(w, m, &pose, &u_plus, from, inputs, tol_w)?;
+            let _ = self.candidates.push((m, violation));
+            if violation <= T::zero() {
+                chosen = Some((m, loss, rows_mismatch(&rows, &u)));
+                break;
+            }
+            if best.as_ref().is_none_or(|(v, _)| violation < *v) {
+                best = Some((violation, m));
+            }
+        }
+        let (m, loss, mismatch) = match chosen {
+            Some(x) => x,
+            None => {
+                let Some((v, m)) = best else {
+                    return Err(TwinError::Mechanism {
+                        time,
+                        mode: from,
+                        failures: heapless::Vec::new(),
+                    });
+                };
+                log::warn!(
+                    "t = {time:.6} s: no mode is consistent after {}; taking {m} (violation {v:?})",
+                    kind.name()
+                );
+                let rows =
+                    constraint_rows(m, with_shaft, |lever| lever_row(&self.reference, lever));
+                let (u_plus, loss) = project(&mass, &u, &rows).unwrap_or((u, T::zero()));
+                self.try_candidate(w, m, &pose, &u_plus, from, inputs, tol_w)?;
+                (m, loss, rows_mismatch(&rows, &u))
+            }
+        };
+        if m.shaft_turning() && with_shaft && m.clutches().iter().all(|c| *c == Clutch::Free) {
+            return Err(TwinError::Coasting { time });
+        }
+        // The candidate slot holds the chosen mode, evaluated: take it.
+        core::mem::swap(&mut self.slot, &mut self.cand);
+        w.y = self.cand_state(w);
+        w.impact += loss;
+        self.dp5.invalidate();
+        self.finish(w, inputs)?;
+        log::info!(
+            "t = {time:.6} s: {} -> {m} ({}, {} coordinates, impact loss {loss:?} J)",
+            from,
+            kind.name(),
+            self.slot.coords
+        );
+        let _ = self.events.push(Event {
+            time: w.t,
+            kind,
+            from,
+            to: m,
+            c: self.c,
+            impact_loss: loss,
+            mismatch,
+        });
+        Ok(())
+    }
+
+    /// The state vector of the slot just taken (stored by [`Twin::try_candidate`]).
+    fn cand_state(&self, w: &Work<T>) -> SVector<T, STATE> {
+        let mut y = w.y;
+        let n = self.slot.map.dof.min(2);
+        for k in 0..2 {
+            y[k] = if k < n { self.slot.ws.q[k] } else { T::zero() };
+            y[QD + k] = if k < n { self.slot.ws.qd[k] } else { T::zero() };
+        }
+        y
+    }
+
+    /// Builds mode `m` into the candidate slot at `pose` with the projected speeds
+    /// `u_plus` (reference coordinates), evaluates it and returns how far it violates
+    /// SPEC 3's consistency conditions (0: consistent).
+    #[allow(clippy::too_many_arguments)]
+    fn try_candidate(
+        &mut self,
+        w: &Work<T>,
+        m: Mode,
+        pose: &[T; 9],
+        u_plus: &SVector<T, 3>,
+        from: Mode,
+        inputs: &Inputs<T>,
+        tol_w: T,
+    ) -> Result<T, TwinError> {
+        let time = w.t.to_f64();
+        // Physical angular speeds after the impact, from the reference model's V.
+        let mut omega = [T::zero(); 9];
+        for (p, o) in omega.iter_mut().enumerate().skip(1) {
+            let b = self.reference.body(p) as usize;
+            let r = 3 * (b.max(1) - 1) + 2;
+            *o = self.reference.ws.v[(r, 0)] * u_plus[0] + self.reference.ws.v[(r, 1)] * u_plus[1];
+        }
+        // The first coordinate choice that assembles here and represents these speeds
+        // (a choice at its dead point maps them wrongly: the lever of A68 cannot carry
+        // a crank turning at its dead point).
+        let scale_w = omega.iter().fold(T::one(), |a, w| a.max(w.abs()));
+        let mut ok = false;
+        for coords in m.coordinate_choices().iter().copied() {
+            let Ok((slot, q)) = Slot::new(&self.params, m, coords, pose, time) else {
+                continue;
+            };
+            self.cand = slot;
+            let mut y = w.y;
+            load_state(&self.cand, &q, &omega, &mut y);
+            if self.cand.eval(w.t, &y, inputs, self.drive).is_err() {
+                continue;
+            }
+            let mapped = self.cand.links(&self.params);
+            let off = (1..9).fold(T::zero(), |e, p| e.max((mapped[p].omega - omega[p]).abs()));
+            if !(off <= T::c(1e-6) * scale_w) {
+                log::debug!("candidate {m} in {coords} coordinates cannot carry the speeds (off by {off:?} rad/s)");
+                continue;
+            }
+            finish_accelerations(&self.cand.model, &mut self.cand.ws);
+            if reactions(&self.cand.model, &mut self.cand.ws, time).is_err() {
+                continue;
+            }
+            ok = true;
+            break;
+        }
+        if !ok {
+            return Ok(T::c(f64::INFINITY));
+        }
+        let links = self.cand.links(&self.params);
+        let c = self.cand.clutch_torques(&self.params, &links);
+        let d = self.drive;
+        let torque_scale = inputs.load + T::c(1.0) + c[0].abs() + c[1].abs();
+        let tol_c = T::c(1e-9) * torque_scale;
+        let alpha_scale = links.iter().fold(T::one(), |a, s| a.max(s.alpha.abs()));
+        let tol_a = T::c(1e-9) * alpha_scale;
+        let shaft_alpha = shaft_accel(m, &links);
+        let mut v = T::zero();
+        let mut locked = T::zero();
+        for (k, ((_, lever), clutch)) in BRANCHES.iter().zip(m.clutches()).enumerate() {
+            match clutch {
+                Clutch::Locked | Clutch::Engaged => {
+                    v += (-c[k] - tol_c).max(T::zero()) / torque_scale;
+                    if clutch == Clutch::Locked {
+                        locked += c[k];
+                    }
+                }
+                Clutch::Free => {
+                    // A free lever touching the shaft must not pass it in the drive
+                    // direction.
+                    let rel_w = links[*lever].omega - shaft_speed(m, &links);
+                    if rel_w.abs() <= tol_w {
+                        let rel = d * (links[*lever].alpha - shaft_alpha);
+                        v += (rel - tol_a).max(T::zero()) / alpha_scale;
+                    }
+                }
+            }
+        }
+        log::debug!(
+            "candidate {m}: c = {:?}, alpha6 = {:?}, alpha8 = {:?}, shaft alpha = {:?}, violation so far {v:?}",
+            c,
+            links[6].alpha,
+            links[8].alpha,
+            shaft_alpha
+        );
+        if !m.shaft_turning() {
+            v += (locked - inputs.load - tol_c).max(T::zero()) / torque_scale;
+        } else if !from.shaft_turning() {
+            // A shaft starting from rest turns in the drive direction.
+            v += (-d * shaft_alpha - tol_a).max(T::zero()) / alpha_scale;
+        }
+        Ok(v)
+    }
+
+    /// Tries the mode's other coordinate choices at `w`'s state and takes the best
+    /// conditioned if it beats the current one by 1.5 (`failed`: the current choice just
+    /// failed, take any that works). Maps the state exactly and logs it.
+    fn switch_coordinates(
+        &mut self,
+        w: &mut Work<T>,
+        inputs: &Inputs<T>,
+        failed: Option<StepError>,
+    ) -> Result<(), TwinError> {
+        let time = w.t.to_f64();
+        let mode = self.slot.mode;
+        let pose = self.slot_links_unwrapped();
+        let links = self.slot.links(&self.params);
+        let now = self.slot.conditioning();
+        let mut best: Option<(T, Coordinates)> = None;
+        let mut failures: heapless::Vec<Failure, 3> = heapless::Vec::new();
+        for coords in mode.coordinate_choices().iter().copied() {
+            if coords == self.slot.coords && failed.is_some() {
+                continue;
+            }
+            match Slot::new(&self.params, mode, coords, &pose, time) {
+                Ok((s, _)) => {
+                    let cond = s.conditioning();
+                    if best.as_ref().is_none_or(|(b, _)| cond > *b) {
+                        best = Some((cond, coords));
+                    }
+                }
+                Err(StepError::Group { group, fault, .. }) => {
+                    let _ = failures.push(Failure {
+                        coords,
+                        group,
+                        fault,
+                    });
+                }
+                Err(e) => return Err(TwinError::Step(e)),
+            }
+        }
+        let Some((cond, coords)) = best else {
+            if let Some(StepError::Group { group, fault, .. }) =
+                failed.map(|e| physical(&self.slot.map, e))
+            {
+                let _ = failures.insert(
+                    0,
+                    Failure {
+                        coords: self.slot.coords,
+                        group,
+                        fault,
+                    },
+                );
+            }
+            return Err(TwinError::Mechanism {
+                time,
+                mode,
+                failures,
+            });
+        };
+        if coords == self.slot.coords || !(failed.is_some() || cond > now * T::c(1.5)) {
+            return Ok(());
+        }
+        let (slot, q) =
+            Slot::new(&self.params, mode, coords, &pose, time).map_err(TwinError::Step)?;
+        let from = self.slot.coords;
+        self.slot = slot;
+        let omega: [T; 9] = core::array::from_fn(|p| links[p].omega);
+        load_state(&self.slot, &q, &omega, &mut w.y);
+        self.dp5.invalidate();
+        self.finish(w, inputs)?;
+        log::info!("t = {time:.6} s: mode {mode}: coordinates {from} -> {coords} (conditioning {now:?} -> {cond:?})");
+        let _ = self.switches.push(CoordinateSwitch {
+            time: w.t,
+            mode,
+            from,
+            to: coords,
+            conditioning: [now, self.slot.conditioning()],
+        });
+        Ok(())
+    }
+
+    /// Makes the state after a successful step the twin's: physical links (angles
+    /// unwrapped), shaft, clutch torques, reactions, the energy audit.
+    fn commit(&mut self, w: &Work<T>, _inputs: &Inputs<T>) -> Result<(), TwinError> {
+        self.t = w.t;
+        let angles = self.slot_links_unwrapped();
+        let mut links = self.slot.links(&self.params);
+        for (l, a) in links.iter_mut().zip(angles.iter()).skip(1) {
+            l.theta = *a;
+        }
+        let shaft = shaft_speed(self.slot.mode, &links);
+        if self.slot.mode.shaft_turning() {
+            let lever = if self.slot.mode.clutches()[0] == Clutch::Engaged {
+                6
+            } else {
+                8
+            };
+            self.shaft_angle += links[lever].theta - self.links[lever].theta;
+        }
+        self.links = links;
+        self.joints = self.slot.joint_reactions(&self.params, &links);
+        let (k, u) = physical_energy(&self.params, &links, shaft);
+        self.audit.kinetic = k;
+        self.audit.potential = u;
+        self.audit.motor_work = w.y[W_MOTOR];
+        self.audit.load_work = w.y[W_LOAD];
+        self.audit.impact_loss += w.impact;
+        Ok(())
+    }
+
+    fn physical_error(&self, e: StepError) -> TwinError {
+        match e {
+            StepError::Group { .. } => {
+                let StepError::Group { time, group, fault } = physical(&self.slot.map, e) else {
+                    return TwinError::Step(e);
+                };
+                let mut failures = heapless::Vec::new();
+                let _ = failures.push(Failure {
+                    coords: self.slot.coords,
+                    group,
+                    fault,
+                });
+                TwinError::Mechanism {
+                    time,
+                    mode: self.slot.mode,
+                    failures,
+                }
+            }
+            e => TwinError::Step(e),
+        }
+    }
+
+    // ---- outputs ----
+
+    /// Time, s.
+    pub fn time(&self) -> T {
+        self.t
+    }
+    /// Steps taken.
+    pub fn steps(&self) -> u64 {
+        self.steps
+    }
+    /// The fixed step, s.
+    pub fn h(&self) -> T {
+        self.settings.h
+    }
+    /// The parameters.
+    pub fn params(&self) -> &CccParams<T> {
+        &self.params
+    }
+    /// The current mode.
+    pub fn mode(&self) -> Mode {
+        self.slot.mode
+    }
+    /// The current independent coordinates.
+    pub fn coordinates(&self) -> Coordinates {
+        self.slot.coords
+    }
+    /// Values of the current coordinates (`[..dof]`), rad.
+    pub fn q(&self) -> &[T] {
+        self.y
+            .as_slice()
+            .get(..self.slot.map.dof.min(2))
+            .unwrap_or(&[])
+    }
+    /// Their speeds, rad/s.
+    pub fn qd(&self) -> &[T] {
+        self.y
+            .as_slice()
+            .get(QD..QD + self.slot.map.dof.min(2))
+            .unwrap_or(&[])
+    }
+    /// Their accelerations, rad/s².
+    pub fn qdd(&self) -> &[T] {
+        self.slot
+            .ws
+            .qdd
+            .get(..self.slot.map.dof.min(2))
+            .unwrap_or(&[])
+    }
+    /// Physical state of link `p` (1..=8).
+    pub fn link(&self, p: usize) -> LinkState<T> {
+        self.links.get(p).copied().unwrap_or_default()
+    }
+    /// World position of point `point` (0 or 1: a bar's first or second joint; 2: D on
+    /// the rocker) of physical link `p`, m.
+    pub fn joint_position(&self, p: usize, point: usize) -> Vec2<T> {
+        let s = self.link(p);
+        let x = match point {
+            0 => T::zero(),
+            1 => self.params.link(p).length,
+            _ => self.params.rocker_d,
+        };
+        s.origin + Vec2::new(s.theta.cos(), s.theta.sin()) * x
+    }
+    /// Shaft speed, rad/s, CCW positive (0 while held).
+    pub fn shaft_speed(&self) -> T {
+        shaft_speed(self.slot.mode, &self.links)
+    }
+    /// Shaft angle turned since the start, rad, CCW positive.
+    pub fn shaft_angle(&self) -> T {
+        self.shaft_angle
+    }
+    /// Transmitted torques `[c6, c8]`, N·m, positive in the drive direction.
+    pub fn clutch_torques(&self) -> [T; 2] {
+        self.c
+    }
+    /// Reactions at the physical joints ([`JOINTS`](super::slot::JOINTS)), N.
+    pub fn joint_reactions(&self) -> &[Vec2<T>; 11] {
+        &self.joints
+    }
+    /// Motor torque at the current state, N·m.
+    pub fn motor_torque(&self) -> T {
+        let c = self.link(CRANK);
+        self.inputs.motor.torque(self.t, c.theta, c.omega)
+    }
+    /// The energy audit.
+    pub fn audit(&self) -> Audit<T> {
+        self.audit
+    }
+    /// Crank angle and speed minus the measured ones given with the last step's inputs.
+    pub fn measurement_residual(&self) -> Option<(T, T)> {
+        let c = self.link(CRANK);
+        self.inputs
+            .measured
+            .map(|(a, w)| (c.theta - a, c.omega - w))
+    }
+    /// The mode changes of the last step (or of the setup).
+    pub fn events(&self) -> &[Event<T>] {
+        &self.events
+    }
+    /// The coordinate switches of the last step.
+    pub fn switches(&self) -> &[CoordinateSwitch<T>] {
+        &self.switches
+    }
+    /// The candidates of the last mode choice, in the order tried, with how far each
+    /// violates SPEC 3's consistency conditions (0: consistent; infinite: its
+    /// constraints are rank-deficient or it cannot assemble).
+    pub fn candidates(&self) -> &[(Mode, T)] {
+        &self.candidates
+    }
+    /// Smallest normalized determinant over the current sequence's groups.
+    pub fn conditioning(&self) -> T {
+        self.slot.conditioning()
+    }
+    /// The current mode's core model.
+    pub fn model(&self) -> &crate::model::Model<T> {
+        &self.slot.model
+    }
+}
+
+// ---- helpers ----
+
+/// Writes a slot's coordinates `q` and their speeds (the angular speeds `omega` of the
+/// coordinates' links, rad/s) into a state vector; unused slots are zeroed.
+fn load_state<T: Real>(slot: &Slot<T>, q: &[T; 2], omega: &[T; 9], y: &mut SVector<T, STATE>) {
+    for (k, (qk, link)) in q.iter().zip(slot.map.coord_link.iter()).enumerate() {
+        let active = k < slot.map.dof;
+        y[k] = if active { *qk } else { T::zero() };
+        y[QD + k] = if active {
+            omega.get(*link as usize).copied().unwrap_or(T::zero())
+        } else {
+            T::zero()
+        };
+    }
+}
+
+/// Lower is preferred: whether the candidate agrees with the event that fired (0) or
+/// not (1), then how many clutches and shaft states change from the current mode.
+fn preference(from: Mode, to: Mode, kind: EventKind) -> u8 {
+    let c = to.clutches();
+    let agrees = match kind {
+        EventKind::Catch(l) => c[if l == 6 { 0 } else { 1 }] != Clutch::Free,
+        EventKind::Release(l) => c[if l == 6 { 0 } else { 1 }] == Clutch::Free,
+        EventKind::Breakaway => to.shaft_turning(),
+        EventKind::ShaftStop => !to.shaft_turning(),
+        EventKind::Start | EventKind::Inputs => true,
+    };
+    let changes = from
+        .clutches()
+        .iter()
+        .zip(c.iter())
+        .filter(|(a, b)| a != b)
+        .count() as u8
+        + u8::from(from.shaft_turning() != to.shaft_turning());
+    (if agrees { 0 } else { 8 }) + changes
+}
+
+/// Shaft speed, rad/s CCW: the engaged lever's in an A mode, 0 otherwise.
+fn shaft_speed<T: Real>(mode: Mode, links: &[LinkState<T>; 9]) -> T {
+    match mode.clutches() {
+        _ if !mode.shaft_turning() => T::zero(),
+        [Clutch::Engaged, _] => links[6].omega,
+        _ => links[8].omega,
+    }
+}
+
+fn shaft_accel<T: Real>(mode: Mode, links: &[LinkState<T>; 9]) -> T {
+    match mode.clutches() {
+        _ if !mode.shaft_turning() => T::zero(),
+        [Clutch::Engaged, _] => links[6].alpha,
+        _ => links[8].alpha,
+    }
+}
+
+/// The velocity constraints of mode `m` in the reference space `(q̇1, q̇2, ω_s)`: a
+/// locked lever stands still, an engaged one turns with the shaft (without shaft
+/// inertia: with the other engaged lever), a held shaft stands still.
+fn constraint_rows<T: Real>(
+    m: Mode,
+    with_shaft: bool,
+    row: impl Fn(usize) -> SVector<T, 3>,
+) -> heapless::Vec<SVector<T, 3>, 3> {
+    let mut rows = heapless::Vec::new();
+    let shaft = SVector::<T, 3>::new(T::zero(), T::zero(), T::one());
+    let c = m.clutches();
+    for (k, (_, lever)) in BRANCHES.iter().enumerate() {
+        match c[k] {
+            Clutch::Locked => {
+                let _ = rows.push(row(*lever));
+            }
+            Clutch::Engaged if with_shaft => {
+                let _ = rows.push(row(*lever) - shaft);
+            }
+            _ => {}
+        }
+    }
+    if !with_shaft && c == [Clutch::Engaged, Clutch::Engaged] {
+        let _ = rows.push(row(6) - row(8));
+    }
+    if with_shaft && !m.shaft_turning() && m != Mode::Free {
+        let _ = rows.push(shaft);
+    }
+    rows
+}
+
+/// Plastic impact (SPEC 3): `u⁺ = u - M⁻¹Jᵀ(J M⁻¹ Jᵀ)⁻¹ J u`, and the kinetic energy
+/// lost. `None` if the constraints are rank-deficient. Without shaft inertia the third
+/// coordinate is unused (`M` has 1 there and `J`'s third column is 0).
+fn project<T: Real>(
+    mass: &SMatrix<T, 3, 3>,
+    u: &SVector<T, 3>,
+    rows: &[SVector<T, 3>],
+) -> Option<(SVector<T, 3>, T)> {
+    let minv = mass.try_inverse()?;
+    let n = rows.len();
+    if n == 0 {
+        return Some((*u, T::zero()));
+    }
+    let mut gram = SMatrix::<T, 3, 3>::identity();
+    let mut ju = SVector::<T, 3>::zeros();
+    for (i, ri) in rows.iter().enumerate() {
+        ju[i] = ri.dot(u);
+        for (j, rj) in rows.iter().enumerate() {
+            gram[(i, j)] = (ri.transpose() * minv * rj)[(0, 0)];
+        }
+    }
+    // Rank: each pivot relative to its row's own weight.
+    let chol = nalgebra::Cholesky::new(gram)?;
+    let l = chol.l();
+    for i in 0..n {
+        if !(l[(i, i)] * l[(i, i)] > T::c(1e-10) * gram[(i, i)].max(T::EPS)) {
+            return None;
+        }
+    }
+    let lambda = chol.solve(&ju);
+    let mut jt_l = SVector::<T, 3>::zeros();
+    for (i, ri) in rows.iter().enumerate() {
+        jt_l += ri * lambda[i];
+    }
+    let u_plus = u - minv * jt_l;
+    let half = T::c(0.5);
+    let loss = half * (u.transpose() * mass * u)[(0, 0)]
+        - half * (u_plus.transpose() * mass * u_plus)[(0, 0)];
+    Some((u_plus, loss.max(T::zero())))
+}
+
+fn rows_mismatch<T: Real>(rows: &[SVector<T, 3>], u: &SVector<T, 3>) -> T {
+    rows.iter().fold(T::zero(), |m, r| m.max(r.dot(u).abs()))
+}
+
+/// Which of the event functions went from ≤ 0 to > 0 (bit k: function k).
+fn fired<T: Real>(g0: &Guards<T>, g1: &Guards<T>) -> u8 {
+    let mut bits = 0u8;
+    for (k, (a, b)) in g0.iter().zip(g1.iter()).enumerate() {
+        if let (Some(a), Some(b)) = (a, b) {
+            if *a <= T::zero() && *b > T::zero() {
+                bits |= 1 << k;
+            }
+        }
+    }
+    bits
+}
+
+/// The first choice of `mode`'s coordinates that assembles at `pose` well conditioned,
+/// else the best conditioned that assembles.
+fn best_slot<T: Real>(
+    params: &CccParams<T>,
+    mode: Mode,
+    pose: &[T; 9],
+    time: f64,
+) -> Result<(Slot<T>, [T; 2]), TwinError> {
+    let mut best: Option<(Slot<T>, [T; 2])> = None;
+    let mut failures: heapless::Vec<Failure, 3> = heapless::Vec::new();
+    for coords in mode.coordinate_choices().iter().copied() {
+        match Slot::new(params, mode, coords, pose, time) {
+            Ok((s, q)) => {
+                if s.conditioning() >= T::c(0.2) {
+                    return Ok((s, q));
+                }
+                if best
+                    .as_ref()
+                    .is_none_or(|(b, _)| s.conditioning() > b.conditioning())
+                {
+                    best = Some((s, q));
+                }
+            }
+            Err(StepError::Group { group, fault, .. }) => {
+                let _ = failures.push(Failure {
+                    coords,
+                    group,
+                    fault,
+                });
+            }
+            Err(e) => return Err(TwinError::Step(e)),
+        }
+    }
+    best.ok_or(TwinError::Mechanism {
+        time,
+        mode,
+        failures,
+    })
+}
+
+/// `a` plus the multiple of 2π that brings it nearest `reference`.
+fn unwrap_near<T: Real>(a: T, reference: T) -> T {
+    let tau = T::two_pi();
+    a + tau * ((reference - a) / tau).round()
+}
+
+fn same_bits<T: Real>(a: T, b: T) -> bool {
+    a.to_f64().to_bits() == b.to_f64().to_bits()
+}
+
+fn same_inputs<T: Real>(a: &Inputs<T>, b: &Inputs<T>) -> bool {
+    use super::slot::MotorInput;
+    let motor = match (a.motor, b.motor) {
+        (MotorInput::Torque(x), MotorInput::Torque(y)) => same_bits(x, y),
+        (MotorInput::Law(_), MotorInput::Law(_)) => true,
+        _ => false,
+    };
+    motor && same_bits(a.load, b.load)
+}
+
+fn check_inputs<T: Real>(inputs: &Inputs<T>) -> Result<(), TwinError> {
+    if !(inputs.load.finite() && inputs.load >= T::zero()) {
+        return Err(TwinError::Setting(
+            "the load torque T_r must be finite and ≥ 0",
+        ));
+    }
+    if let super::slot::MotorInput::Torque(v) = inputs.motor {
+        if !v.finite() {
+            return Err(TwinError::Setting("the motor torque must be finite"));
+        }
+    }
+    if let Some((a, w)) = inputs.measured {
+        if !(a.finite() && w.finite()) {
+            return Err(TwinError::Setting(
+                "the measured crank angle and speed must be finite",
+            ));
+        }
+    }
+    Ok(())
+}
