@@ -14,7 +14,8 @@ Usage:
   host-sim run <scenario> [options]  simulate a scenario and write CSV
   host-sim help | --help | -h        show this help
 
-Scenarios: slider-crank, five-bar
+Scenarios: slider-crank, five-bar (mechanisms);
+           ccc-s1, ccc-s2 (the Constantinesco torque converter, SPEC 3)
 
 Options of run:
   --out FILE|-       write the CSV to FILE, the summary to stdout;
@@ -27,6 +28,13 @@ Options of run:
   --quiet            no summary
   Values may also be given as --option=VALUE.
 
+Options of the converter scenarios only:
+  --motor N·M        constant motor torque on the crank, CCW positive (default 12)
+  --load N·M         ccc-s2: load torque T_r >= 0 on the shaft (default 800)
+  --ccw              ccc-s2: the shaft turns counter-clockwise (SPEC 3's CCW variant;
+                     default clockwise)
+  ccc-s1 runs in free mode, without clutches: --load and --ccw do not apply to it.
+
 CSV columns (one row at t = 0, then one per written step):
   t                  time, s
   q{j} qd{j} qdd{j}  coordinate j (1-based), its rate and acceleration
@@ -36,6 +44,28 @@ CSV columns (one row at t = 0, then one per written step):
   N{i}_{j} M{i}_{j}  prismatic joint: |normal force|, N, and reaction moment, N·m
   drive_torque{j}    driving torque (force) the motion requires on coordinate j
   A repeated name gets a suffix _2, _3, ...
+
+Converter scenarios (ccc-s1: free mode, h = 1e-4 s, t_end = 1 s; ccc-s2: h = 1e-4 s,
+t_end = 1 s): a row at t = 0, every N-th step and the last state, columns
+  t mode mode_code coords       time, s; mode name (free I0 I6 I8 jam A6 A8 A68), its
+                                code 0..7 in that order, the independent coordinates
+  q1 q2 qd1 qd2                 coordinates (rad) and speeds (rad/s); empty past the
+                                mode's DOF (q2 in 1-DOF modes, all four in jam)
+  theta{p} omega{p}             angle (rad, unwrapped) and speed (rad/s) of link p = 1..8
+  shaft_speed shaft_angle       output shaft, rad/s and rad turned, CCW positive
+  c6 c8                         torque each clutch transmits, N·m, + in drive direction
+  motor_torque                  motor torque on the crank, N·m
+  R_A R_B R_C R_E R_F R_D5 R_D7 R_G R_I R_H6 R_H8   |joint reaction|, N
+  kinetic potential             energy now, J
+  motor_work load_work impact_loss audit_residual   energy audit since t = 0, J
+  With --out FILE, the mode changes go to FILE's stem + .events.csv (time, event,
+  from, to, c6, c8, impact_loss, mismatch; the first row is the start event, except in
+  free mode, which has no mode choice) and the coordinate switches to stem +
+  .switches.csv (time, mode, from, to, conditioning_before, conditioning_after); with
+  the CSV on stdout these two logs are not written.
+  The summary gives the first breakaway, the events by kind, the coordinate switches,
+  the energy audit and how the run ended; it is printed also when a step fails.
+  ccc-s1 ending at the mechanism's singularity is its expected end: exit status 0.
 
 Exit status: 0 success, 1 run failure (step error, file error), 2 bad arguments.
 ";
@@ -69,6 +99,13 @@ pub struct RunOptions {
     pub f32: bool,
     /// No summary.
     pub quiet: bool,
+    /// Converter scenarios: the shaft turns counter-clockwise (SPEC 3's CCW variant).
+    pub ccw: bool,
+    /// Converter scenarios: load torque T_r on the shaft, N·m (`None`: the scenario's).
+    pub load: Option<f64>,
+    /// Converter scenarios: constant motor torque on the crank, N·m, CCW positive
+    /// (`None`: the scenario's).
+    pub motor: Option<f64>,
 }
 
 impl RunOptions {
@@ -83,6 +120,9 @@ impl RunOptions {
             every: 1,
             f32: false,
             quiet: false,
+            ccw: false,
+            load: None,
+            motor: None,
         }
     }
 }
@@ -157,7 +197,8 @@ fn parse_run(args: &[String]) -> Result<Command, UsageError> {
     let mut scenario = None;
     let mut out = Output::Stdout;
     let (mut h, mut t_end, mut every) = (None, None, 1);
-    let (mut f32, mut quiet) = (false, false);
+    let (mut f32, mut quiet, mut ccw) = (false, false, false);
+    let (mut load, mut motor) = (None, None);
     let mut k = 0;
     while k < args.len() {
         let arg = args[k].as_str();
@@ -185,17 +226,17 @@ fn parse_run(args: &[String]) -> Result<Command, UsageError> {
             _ => (arg, None),
         };
         match name {
-            "--f32" | "--quiet" => {
+            "--f32" | "--quiet" | "--ccw" => {
                 if inline.is_some() {
                     return Err(usage_err(format!("{name}: takes no value (got '{arg}')")));
                 }
-                if name == "--f32" {
-                    f32 = true;
-                } else {
-                    quiet = true;
+                match name {
+                    "--f32" => f32 = true,
+                    "--quiet" => quiet = true,
+                    _ => ccw = true,
                 }
             }
-            "--out" | "--h" | "--t-end" | "--every" => {
+            "--out" | "--h" | "--t-end" | "--every" | "--load" | "--motor" => {
                 let value = match inline {
                     Some(v) => v,
                     None => {
@@ -210,6 +251,8 @@ fn parse_run(args: &[String]) -> Result<Command, UsageError> {
                     "--out" => out = parse_out(&value)?,
                     "--h" => h = Some(parse_seconds(name, &value)?),
                     "--t-end" => t_end = Some(parse_seconds(name, &value)?),
+                    "--load" => load = Some(parse_load(&value)?),
+                    "--motor" => motor = Some(parse_torque(name, &value)?),
                     _ => every = parse_every(&value)?,
                 }
             }
@@ -222,6 +265,7 @@ fn parse_run(args: &[String]) -> Result<Command, UsageError> {
             ScenarioId::names()
         ))
     })?;
+    check_converter_options(scenario, ccw, load.is_some(), motor.is_some())?;
     Ok(Command::Run(RunOptions {
         scenario,
         out,
@@ -230,7 +274,73 @@ fn parse_run(args: &[String]) -> Result<Command, UsageError> {
         every,
         f32,
         quiet,
+        ccw,
+        load,
+        motor,
     }))
+}
+
+/// `--ccw`, `--load` and `--motor` apply to the converter scenarios only, and `--ccw`
+/// and `--load` not to `ccc-s1` (free mode: no clutch, no shaft load, no drive
+/// direction).
+fn check_converter_options(
+    scenario: ScenarioId,
+    ccw: bool,
+    load: bool,
+    motor: bool,
+) -> Result<(), UsageError> {
+    let given = [("--ccw", ccw), ("--load", load), ("--motor", motor)];
+    if !scenario.is_converter() {
+        if let Some((name, _)) = given.iter().find(|(_, g)| *g) {
+            return Err(usage_err(format!(
+                "{name}: only for the converter scenarios ({}), not {}",
+                ScenarioId::CONVERTER.map(ScenarioId::name).join(", "),
+                scenario.name()
+            )));
+        }
+    }
+    if scenario == ScenarioId::CccS1 {
+        if let Some((name, _)) = given[..2].iter().find(|(_, g)| *g) {
+            return Err(usage_err(format!(
+                "{name}: ccc-s1 runs in free mode without clutches, so it has no shaft load \
+                 and no drive direction (use ccc-s2)"
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// A number of `what` (for messages): finite.
+fn parse_finite(name: &str, value: &str, what: &str) -> Result<f64, UsageError> {
+    let x: f64 = value.trim().parse().map_err(|_| {
+        usage_err(format!(
+            "{name}: '{value}' is not a number ({what} expected)"
+        ))
+    })?;
+    if !x.is_finite() {
+        return Err(usage_err(format!(
+            "{name}: '{value}' is not finite ({what} expected)"
+        )));
+    }
+    Ok(x)
+}
+
+/// A torque in N·m: a finite number.
+fn parse_torque(name: &str, value: &str) -> Result<f64, UsageError> {
+    parse_finite(name, value, "a torque in N·m")
+}
+
+/// The load torque T_r in N·m: a finite number, not negative.
+fn parse_load(value: &str) -> Result<f64, UsageError> {
+    let what = "a load torque T_r >= 0 in N·m";
+    let x = parse_finite("--load", value, what)?;
+    if x < 0.0 {
+        return Err(usage_err(format!(
+            "--load: {value} is negative ({what} expected)"
+        )));
+    }
+    // -0 is 0.
+    Ok(x + 0.0)
 }
 
 fn parse_out(value: &str) -> Result<Output, UsageError> {
@@ -328,6 +438,44 @@ mod tests {
             (&["list", "x"][..], "'x'"),
             (&["walk"][..], "'walk'"),
             (&[][..], "missing command"),
+        ] {
+            let e = parse(args).unwrap_err();
+            assert!(e.0.contains(needle), "{args:?}: {e}");
+        }
+    }
+
+    #[test]
+    fn converter_options() {
+        let c = parse(&["run", "--ccw", "ccc-s2", "--load=0", "--motor", "-3.5"]);
+        let mut want = RunOptions::new(ScenarioId::CccS2);
+        want.ccw = true;
+        want.load = Some(0.0);
+        want.motor = Some(-3.5);
+        assert_eq!(c, Ok(Command::Run(want)));
+        // -0 is a load of 0.
+        let Ok(Command::Run(o)) = parse(&["run", "ccc-s2", "--load", "-0"]) else {
+            panic!("--load -0")
+        };
+        assert!(o.load.is_some_and(|l| l == 0.0 && l.is_sign_positive()));
+        // S1 takes a motor override.
+        let mut want = RunOptions::new(ScenarioId::CccS1);
+        want.motor = Some(6.0);
+        assert_eq!(
+            parse(&["run", "ccc-s1", "--motor", "6"]),
+            Ok(Command::Run(want))
+        );
+        for (args, needle) in [
+            (
+                &["run", "ccc-s2", "--load", "-1"][..],
+                "--load: -1 is negative",
+            ),
+            (&["run", "ccc-s2", "--motor", "inf"][..], "--motor"),
+            (
+                &["run", "five-bar", "--ccw"][..],
+                "--ccw: only for the converter",
+            ),
+            (&["run", "ccc-s1", "--load", "1"][..], "--load: ccc-s1"),
+            (&["run", "ccc-s1", "--ccw"][..], "--ccw: ccc-s1"),
         ] {
             let e = parse(args).unwrap_err();
             assert!(e.0.contains(needle), "{args:?}: {e}");

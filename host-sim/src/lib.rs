@@ -5,16 +5,23 @@
 //! (CSV of the state, the applied and kinetostatic driving torques and the joint
 //! reactions, plus a summary), `host-sim help`.
 //!
+//! It also runs the Constantinesco torque converter's scenarios S1 and S2 (SPEC 3) on
+//! the core's digital twin: `host-sim run ccc-s1|ccc-s2 [--motor N·M] [--load N·M]
+//! [--ccw]` writes the state CSV, the logs of the mode changes and of the coordinate
+//! switches, and a summary ([`ccc`]).
+//!
 //! The binary is a thin wrapper over [`main_with`]; tests and benches can call
 //! [`parse_args`], [`simulate`] or [`main_with`] directly.
 
 #![warn(missing_docs)]
 
+pub mod ccc;
 pub mod cli;
 pub mod columns;
 pub mod run;
 pub mod scenarios;
 
+pub use ccc::{CccScenario, CccSummary, End};
 pub use cli::{parse_args, Command, Output, RunOptions, UsageError, HINT, USAGE};
 pub use columns::{Column, Layout};
 pub use run::{simulate, step_count, MaxReaction, MeanSpeed, RunError, Summary, MAX_STEPS};
@@ -58,13 +65,15 @@ where
     }
 }
 
-/// Writes `host-sim list`: one line per scenario with its formula, description and
-/// integration settings.
+/// Writes `host-sim list`: one line per mechanism scenario with its formula,
+/// description and integration settings. (The converter scenarios `ccc-s1` and `ccc-s2`
+/// are described in `host-sim help`.)
 pub fn list(w: &mut dyn Write) -> io::Result<()> {
     let mut lines = Vec::new();
-    for s in ScenarioId::ALL {
+    for s in ScenarioId::MECHANISMS {
         match s.build::<f64>() {
-            Ok(sc) => lines.push((
+            None => continue,
+            Some(Ok(sc)) => lines.push((
                 s.name(),
                 sc.model.formula().to_string(),
                 format!(
@@ -74,7 +83,7 @@ pub fn list(w: &mut dyn Write) -> io::Result<()> {
                     sc.t_end
                 ),
             )),
-            Err(e) => lines.push((s.name(), "?".to_string(), format!("cannot build: {e}"))),
+            Some(Err(e)) => lines.push((s.name(), "?".to_string(), format!("cannot build: {e}"))),
         }
     }
     let wn = lines.iter().map(|l| l.0.len()).max().unwrap_or(0);
@@ -86,8 +95,12 @@ pub fn list(w: &mut dyn Write) -> io::Result<()> {
 }
 
 /// Runs `host-sim run` with `opts`: the CSV to the file or `stdout`, the summary to the
-/// other stream (unless quiet), errors to `stderr`; returns the exit code.
+/// other stream (unless quiet), errors to `stderr`; returns the exit code. The converter
+/// scenarios go to [`ccc::execute`].
 pub fn execute(opts: &RunOptions, stdout: &mut dyn Write, stderr: &mut dyn Write) -> u8 {
+    if opts.scenario.is_converter() {
+        return ccc::execute(opts, stdout, stderr);
+    }
     let result = match &opts.out {
         Output::Stdout => dispatch(opts, stdout, "stdout").map(|s| (s, false)),
         Output::File(path) => {
@@ -106,13 +119,21 @@ pub fn execute(opts: &RunOptions, stdout: &mut dyn Write, stderr: &mut dyn Write
             }
             EXIT_OK
         }
-        // `host-sim run ... | head`: the reader stopped; not an error of the run.
-        Err(RunError::Write { target, error })
+        Err(e) => report_run_error(e, stderr),
+    }
+}
+
+/// Reports a run's error on `stderr` (with the usage hint for bad options); returns its
+/// exit code. A broken pipe on `stdout` (`host-sim run ... | head`: the reader stopped)
+/// is not an error of the run.
+pub(crate) fn report_run_error(e: RunError, stderr: &mut dyn Write) -> u8 {
+    match e {
+        RunError::Write { target, error }
             if target == "stdout" && error.kind() == io::ErrorKind::BrokenPipe =>
         {
             EXIT_OK
         }
-        Err(e) => {
+        e => {
             let _ = writeln!(stderr, "host-sim: {e}");
             if let RunError::Usage(_) = e {
                 let _ = writeln!(stderr, "{HINT}");

@@ -261,8 +261,10 @@ pub fn step_count(h: f64, t_end: f64) -> Result<u64, UsageError> {
     Ok((n as u64).max(1))
 }
 
-/// Runs `opts` in scalar `T`, writing the CSV to `csv` (`target` names it in errors).
-/// The CSV is flushed before returning, also on a step error.
+/// Runs the mechanism scenario of `opts` in scalar `T`, writing the CSV to `csv`
+/// (`target` names it in errors). The CSV is flushed before returning, also on a step
+/// error. A converter scenario is a [`RunError::Setup`]: [`crate::ccc::simulate`] runs
+/// those.
 pub fn simulate<T: Real>(
     opts: &RunOptions,
     csv: &mut dyn Write,
@@ -273,17 +275,28 @@ pub fn simulate<T: Real>(
     } else {
         "f64"
     };
+    let not_a_mechanism = || {
+        RunError::Setup(format!(
+            "{} is a converter scenario: run it with host_sim::ccc::simulate",
+            opts.scenario.name()
+        ))
+    };
     let scenario = opts
         .scenario
         .build::<T>()
+        .ok_or_else(not_a_mechanism)?
         .map_err(|e| RunError::Setup(format!("cannot build {}: {e}", opts.scenario.name())))?;
     // The defaults as f64 (the f32 scenario's 0.01 s step is 0.0099999998 s).
     let (h64, t_end) = match (opts.h, opts.t_end) {
         (Some(h), Some(t)) => (h, t),
         (h, t) => {
-            let s64 = opts.scenario.build::<f64>().map_err(|e| {
-                RunError::Setup(format!("cannot build {}: {e}", opts.scenario.name()))
-            })?;
+            let s64 = opts
+                .scenario
+                .build::<f64>()
+                .ok_or_else(not_a_mechanism)?
+                .map_err(|e| {
+                    RunError::Setup(format!("cannot build {}: {e}", opts.scenario.name()))
+                })?;
             (h.unwrap_or(s64.h), t.unwrap_or(s64.t_end))
         }
     };

@@ -68,6 +68,31 @@ pub(crate) fn physical_link<T: Real>(p: &CccParams<T>, k: usize) -> Link<T> {
     link
 }
 
+/// The core model of `mode` driven by `coords` at the physical link angles `pose` (rad,
+/// index 1..=8) and the values of its coordinates there: what the twin integrates in
+/// that mode. Model bodies follow the physical numbering with the locked levers left
+/// out (they are ground) and, in A68, lever 8 joined to lever 6.
+pub fn mode_model<T: Real>(
+    p: &CccParams<T>,
+    mode: Mode,
+    coords: Coordinates,
+    pose: &[T; 9],
+) -> Result<(Model<T>, [T; 2]), ModelError> {
+    let (model, map) = build(p, mode, coords, pose)?;
+    Ok((model, map.coordinates_at(pose)))
+}
+
+impl<T: Real> BodyMap<T> {
+    /// The coordinates' values at the physical angles `pose` (unused slots 0).
+    pub(crate) fn coordinates_at(&self, pose: &[T; 9]) -> [T; 2] {
+        let mut q = [T::zero(); 2];
+        for (qj, link) in q.iter_mut().zip(self.coord_link.iter()).take(self.dof) {
+            *qj = pose.get(*link as usize).copied().unwrap_or(T::zero());
+        }
+        q
+    }
+}
+
 /// The model of `mode` driven by `coords`, at the physical link angles `pose` (rad,
 /// index 1..=8: group guesses, locked levers' angles, A68's lever offset).
 pub(crate) fn build<T: Real>(
@@ -301,7 +326,7 @@ pub(crate) fn build<T: Real>(
 /// angle `crank` and swing-link angle `swing` on the parameters' branches (SPEC 3:
 /// C from circles about B and E, D on the rocker, G and I from circles about D and H);
 /// `None` if it cannot assemble there.
-pub(crate) fn initial_pose<T: Real>(p: &CccParams<T>, crank: T, swing: T) -> Option<[T; 9]> {
+pub fn initial_pose<T: Real>(p: &CccParams<T>, crank: T, swing: T) -> Option<[T; 9]> {
     let u = |a: T| Vec2::new(a.cos(), a.sin());
     let angle = |v: Vec2<T>| v.y.atan2(v.x);
     let b = p.a + u(crank) * p.link(CRANK).length;

@@ -7,6 +7,7 @@ mod build;
 pub mod mode;
 pub mod params;
 
+pub use build::{initial_pose, mode_model};
 pub use mode::{Clutch, Coordinates, Mode};
 pub use params::{Bar, CccParams, DriveDirection, Side};
 mod slot;

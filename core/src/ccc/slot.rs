@@ -86,10 +86,7 @@ impl<T: Real> Slot<T> {
             time,
             what: "converter model at this pose",
         })?;
-        let mut q = [T::zero(); 2];
-        for (qj, link) in q.iter_mut().zip(map.coord_link.iter()).take(map.dof) {
-            *qj = pose.get(*link as usize).copied().unwrap_or(T::zero());
-        }
+        let q = map.coordinates_at(pose);
         let mut ws = Workspace::new();
         assemble(&model, &mut ws, q.get(..map.dof).unwrap_or(&[]))
             .map_err(|e| physical(&map, retime(e, time)))?;

@@ -119,6 +119,15 @@ pub struct Event<T> {
     pub impact_loss: T,
     /// Relative speed of the levers projected away by the impact, rad/s.
     pub mismatch: T,
+    /// Whether the new mode met every consistency condition (SPEC 3); `false` when
+    /// none did and the least violating one was taken.
+    pub consistent: bool,
+    /// Largest distance between a joint placed by the old mode's model and by the new
+    /// one at the event, m.
+    pub position_gap: T,
+    /// Largest difference between a link's speed in the new model and the speed it
+    /// should have after the impact projection, rad/s.
+    pub speed_gap: T,
 }
 
 /// A change of independent coordinates.
@@ -134,6 +143,10 @@ pub struct CoordinateSwitch<T> {
     pub to: Coordinates,
     /// Smallest normalized determinant of the sequence before, and after.
     pub conditioning: [T; 2],
+    /// Largest distance between a joint placed by the two sequences, m.
+    pub position_gap: T,
+    /// Largest difference between a link's angular speed in the two, rad/s.
+    pub speed_gap: T,
 }
 
 /// A group that failed in one coordinate choice.
@@ -156,7 +169,9 @@ pub enum TwinError {
     Setting(&'static str),
     /// An evaluation failed (not a group: a non-finite input, a singular mass matrix).
     Step(StepError),
-    /// A singularity of the mechanism itself: every coordinate choice of the mode fails.
+    /// Every coordinate choice of the mode fails here: a singularity of the mechanism
+    /// itself (SPEC 3: its constraints lose rank), or a dead point of every choice the
+    /// mode has (A68 has only its lever, which cannot pass the crank's dead points).
     Mechanism {
         /// Time, s.
         time: f64,
@@ -185,7 +200,7 @@ impl fmt::Display for TwinError {
             } => {
                 write!(
                     f,
-                    "t = {time:.6} s: singular configuration of the mechanism in mode {mode}: "
+                    "t = {time:.6} s: mode {mode}: no coordinate choice drives the mechanism here (a singularity of the mechanism, or a dead point of every choice the mode has): "
                 )?;
                 for (k, x) in failures.iter().enumerate() {
                     let sep = if k == 0 { "" } else { "; " };
@@ -266,6 +281,7 @@ pub struct Twin<T: Real> {
     events: heapless::Vec<Event<T>, MAX_EVENTS_PER_STEP>,
     switches: heapless::Vec<CoordinateSwitch<T>, { MAX_RETRIES + 1 }>,
     candidates: heapless::Vec<(Mode, T), 8>,
+    speed_gap: T,
 }
 
 /// The working state of a step, committed only when the whole step succeeds.
@@ -337,6 +353,7 @@ impl<T: Real> Twin<T> {
             events: heapless::Vec::new(),
             switches: heapless::Vec::new(),
             candidates: heapless::Vec::new(),
+            speed_gap: T::zero(),
         };
         for (p, l) in twin.links.iter_mut().enumerate() {
             l.theta = pose[p];
@@ -747,14 +764,14 @@ impl<T: Real> Twin<T> {
             let violation = self.try_candidate(w, m, &pose, &u_plus, from, inputs, tol_w)?;
             let _ = self.candidates.push((m, violation));
             if violation <= T::zero() {
-                chosen = Some((m, loss, rows_mismatch(&rows, &u)));
+                chosen = Some((m, loss, rows_mismatch(&rows, &u), true));
                 break;
             }
             if best.as_ref().is_none_or(|(v, _)| violation < *v) {
                 best = Some((violation, m));
             }
         }
-        let (m, loss, mismatch) = match chosen {
+        let (m, loss, mismatch, consistent) = match chosen {
             Some(x) => x,
             None => {
                 let Some((v, m)) = best else {
@@ -772,7 +789,7 @@ impl<T: Real> Twin<T> {
                     constraint_rows(m, with_shaft, |lever| lever_row(&self.reference, lever));
                 let (u_plus, loss) = project(&mass, &u, &rows).unwrap_or((u, T::zero()));
                 self.try_candidate(w, m, &pose, &u_plus, from, inputs, tol_w)?;
-                (m, loss, rows_mismatch(&rows, &u))
+                (m, loss, rows_mismatch(&rows, &u), false)
             }
         };
         if m.shaft_turning() && with_shaft && m.clutches().iter().all(|c| *c == Clutch::Free) {
@@ -784,6 +801,8 @@ impl<T: Real> Twin<T> {
         w.impact += loss;
         self.dp5.invalidate();
         self.finish(w, inputs)?;
+        let after = self.slot.links(&self.params);
+        let position_gap = joint_gap(&self.params, &links, &after);
         log::info!(
             "t = {time:.6} s: {} -> {m} ({}, {} coordinates, impact loss {loss:?} J)",
             from,
@@ -798,6 +817,9 @@ impl<T: Real> Twin<T> {
             c: self.c,
             impact_loss: loss,
             mismatch,
+            consistent,
+            position_gap,
+            speed_gap: self.speed_gap,
         });
         Ok(())
     }
@@ -852,6 +874,7 @@ impl<T: Real> Twin<T> {
             }
             let mapped = self.cand.links(&self.params);
             let off = (1..9).fold(T::zero(), |e, p| e.max((mapped[p].omega - omega[p]).abs()));
+            self.speed_gap = off;
             if !(off <= T::c(1e-6) * scale_w) {
                 log::debug!("candidate {m} in {coords} coordinates cannot carry the speeds (off by {off:?} rad/s)");
                 continue;
@@ -978,6 +1001,11 @@ impl<T: Real> Twin<T> {
         load_state(&self.slot, &q, &omega, &mut w.y);
         self.dp5.invalidate();
         self.finish(w, inputs)?;
+        let after = self.slot.links(&self.params);
+        let position_gap = joint_gap(&self.params, &links, &after);
+        let speed_gap = (1..9).fold(T::zero(), |e, p| {
+            e.max((after[p].omega - links[p].omega).abs())
+        });
         log::info!("t = {time:.6} s: mode {mode}: coordinates {from} -> {coords} (conditioning {now:?} -> {cond:?})");
         let _ = self.switches.push(CoordinateSwitch {
             time: w.t,
@@ -985,6 +1013,8 @@ impl<T: Real> Twin<T> {
             from,
             to: coords,
             conditioning: [now, self.slot.conditioning()],
+            position_gap,
+            speed_gap,
         });
         Ok(())
     }
@@ -1160,6 +1190,20 @@ impl<T: Real> Twin<T> {
 }
 
 // ---- helpers ----
+
+/// Largest distance between the joints (both ends of every link, and D) of two
+/// physical states, m.
+fn joint_gap<T: Real>(params: &CccParams<T>, a: &[LinkState<T>; 9], b: &[LinkState<T>; 9]) -> T {
+    let mut gap = T::zero();
+    for p in 1..9 {
+        let len = params.link(p).length;
+        for x in [T::zero(), len, params.rocker_d] {
+            let at = |s: &LinkState<T>| s.origin + Vec2::new(s.theta.cos(), s.theta.sin()) * x;
+            gap = gap.max((at(&a[p]) - at(&b[p])).norm());
+        }
+    }
+    gap
+}
 
 /// Writes a slot's coordinates `q` and their speeds (the angular speeds `omega` of the
 /// coordinates' links, rad/s) into a state vector; unused slots are zeroed.

@@ -1,0 +1,730 @@
+//! `host-sim run ccc-s1|ccc-s2`: the Constantinesco torque converter's scenarios (SPEC 3)
+//! on a [`structomat::ccc::Twin`]: the state CSV, the logs of the mode changes and of
+//! the coordinate switches, and the summary (events, energy audit, how the run ended).
+//!
+//! Exit codes: 0 when the run reaches `t_end`, and for `ccc-s1` also when it ends at a
+//! singularity of the mechanism ([`TwinError::Mechanism`]): that is S1's expected end
+//! (SPEC 3), reported in the summary. Any other failed step is exit code 1, after the
+//! rows and log lines before it are written and the summary is printed.
+
+use crate::cli::{Output, RunOptions, UsageError};
+use crate::run::{step_count, RunError};
+use crate::scenarios::ScenarioId;
+use std::fmt;
+use std::fs::File;
+use std::io::{self, BufWriter, Write};
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+use structomat::ccc::{
+    Audit, CccParams, Coordinates, DriveDirection, EventKind, Inputs, Mode, MotorInput, Twin,
+    TwinError, TwinSettings, JOINT_NAMES,
+};
+use structomat::motor::Motor;
+use structomat::Real;
+
+/// A converter scenario's settings (SPEC 3), after the command-line overrides.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CccScenario {
+    /// `false`: free mode, no clutch (S1).
+    pub clutch: bool,
+    /// Constant motor torque on the crank, N·m, CCW positive.
+    pub motor: f64,
+    /// Load torque T_r on the shaft, N·m (≥ 0; no effect in free mode).
+    pub load: f64,
+    /// Which way the shaft turns.
+    pub drive: DriveDirection,
+    /// Default step, s.
+    pub h: f64,
+    /// Default simulated time, s.
+    pub t_end: f64,
+}
+
+impl CccScenario {
+    /// S1 (thesis 7.1): free mode, 12 N·m, from rest; `h` = 1e-4 s, `t_end` = 1 s (it
+    /// ends at a singularity of the mechanism well before).
+    pub fn s1() -> Self {
+        CccScenario {
+            clutch: false,
+            motor: 12.0,
+            load: 0.0,
+            drive: DriveDirection::Cw,
+            h: 1e-4,
+            t_end: 1.0,
+        }
+    }
+
+    /// S2 (thesis 7.2): 12 N·m, T_r = 800 N·m from t = 0, shaft CW, from rest;
+    /// `h` = 1e-4 s, `t_end` = 1 s.
+    pub fn s2() -> Self {
+        CccScenario {
+            clutch: true,
+            motor: 12.0,
+            load: 800.0,
+            drive: DriveDirection::Cw,
+            h: 1e-4,
+            t_end: 1.0,
+        }
+    }
+
+    /// With the overrides of `opts` (`--motor`, `--load`, `--ccw`).
+    pub fn with_options(mut self, opts: &RunOptions) -> Self {
+        if let Some(m) = opts.motor {
+            self.motor = m;
+        }
+        if let Some(l) = opts.load {
+            self.load = l;
+        }
+        if opts.ccw {
+            self.drive = DriveDirection::Ccw;
+        }
+        self
+    }
+}
+
+impl fmt::Display for CccScenario {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if self.clutch {
+            let dir = match self.drive {
+                DriveDirection::Cw => "CW",
+                DriveDirection::Ccw => "CCW",
+            };
+            write!(
+                f,
+                "motor {} N·m, T_r = {} N·m, shaft {dir}, from rest",
+                self.motor, self.load
+            )
+        } else {
+            write!(
+                f,
+                "free mode (no clutch), motor {} N·m, from rest",
+                self.motor
+            )
+        }
+    }
+}
+
+/// The event kinds, in the order of the summary's counts.
+pub const EVENT_KINDS: [EventKind; 8] = [
+    EventKind::Start,
+    EventKind::Inputs,
+    EventKind::Catch(6),
+    EventKind::Catch(8),
+    EventKind::Release(6),
+    EventKind::Release(8),
+    EventKind::Breakaway,
+    EventKind::ShaftStop,
+];
+
+/// Header of the event log.
+pub const EVENT_COLUMNS: [&str; 8] = [
+    "time",
+    "event",
+    "from",
+    "to",
+    "c6",
+    "c8",
+    "impact_loss",
+    "mismatch",
+];
+
+/// Header of the coordinate-switch log.
+pub const SWITCH_COLUMNS: [&str; 6] = [
+    "time",
+    "mode",
+    "from",
+    "to",
+    "conditioning_before",
+    "conditioning_after",
+];
+
+/// The state CSV's column names: `t, mode, mode_code, coords, q1, q2, qd1, qd2,
+/// theta1..8, omega1..8, shaft_speed, shaft_angle, c6, c8, motor_torque, R_<joint>` for
+/// every joint of [`JOINT_NAMES`], then `kinetic, potential, motor_work, load_work,
+/// impact_loss, audit_residual`. `q2`/`qd2` (1-DOF modes) and all four (jam) are left
+/// empty past the mode's DOF.
+pub fn columns() -> Vec<String> {
+    let mut c: Vec<String> = ["t", "mode", "mode_code", "coords", "q1", "q2", "qd1", "qd2"]
+        .map(String::from)
+        .to_vec();
+    c.extend((1..=8).map(|p| format!("theta{p}")));
+    c.extend((1..=8).map(|p| format!("omega{p}")));
+    c.extend(
+        ["shaft_speed", "shaft_angle", "c6", "c8", "motor_torque"]
+            .iter()
+            .map(|s| s.to_string()),
+    );
+    c.extend(JOINT_NAMES.iter().map(|j| format!("R_{j}")));
+    c.extend(
+        [
+            "kinetic",
+            "potential",
+            "motor_work",
+            "load_work",
+            "impact_loss",
+            "audit_residual",
+        ]
+        .iter()
+        .map(|s| s.to_string()),
+    );
+    c
+}
+
+/// The event and switch logs next to the state CSV `out`: its stem +
+/// `.events.csv` and `.switches.csv` (`s2.csv` → `s2.events.csv`, `s2.switches.csv`).
+pub fn log_paths(out: &Path) -> (PathBuf, PathBuf) {
+    (
+        out.with_extension("events.csv"),
+        out.with_extension("switches.csv"),
+    )
+}
+
+/// A writer and its name for error messages (a path or `stdout`).
+pub struct Sink<'a> {
+    /// Where the lines go.
+    pub w: &'a mut dyn Write,
+    /// Its name in errors.
+    pub target: String,
+}
+
+impl Sink<'_> {
+    fn err(&self, error: io::Error) -> RunError {
+        RunError::Write {
+            target: self.target.clone(),
+            error,
+        }
+    }
+}
+
+/// How a converter run ended.
+#[derive(Clone, Debug, PartialEq)]
+pub enum End {
+    /// It reached `t_end`.
+    Completed,
+    /// Step `steps + 1` failed; the twin keeps the state after `steps` steps.
+    Stopped {
+        /// The twin's error.
+        error: TwinError,
+        /// Whether it is the scenario's expected end (S1 at the mechanism's
+        /// singularity): exit code 0, else 1.
+        expected: bool,
+    },
+}
+
+/// What a converter run did (printed as a few lines by its `Display`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct CccSummary {
+    /// The scenario.
+    pub scenario: ScenarioId,
+    /// Its settings after the overrides.
+    pub settings: CccScenario,
+    /// `f64` or `f32`.
+    pub precision: &'static str,
+    /// Step size, s.
+    pub h: f64,
+    /// Simulated time asked for, s.
+    pub t_end: f64,
+    /// Steps completed.
+    pub steps: u64,
+    /// Time of the last good state, s.
+    pub time: f64,
+    /// State CSV data rows written (including the one at t = 0 and the last state).
+    pub rows: u64,
+    /// The event and switch logs' paths, when written.
+    pub logs: Option<(String, String)>,
+    /// Events by kind, in [`EVENT_KINDS`] order: `(name, count)`.
+    pub events: Vec<(&'static str, u64)>,
+    /// Time of the first breakaway event, s.
+    pub first_breakaway: Option<f64>,
+    /// Coordinate switches.
+    pub switches: u64,
+    /// Events with a plastic impact (a kinetic energy loss > 0).
+    pub impacts: u64,
+    /// The energy audit at the last good state, J.
+    pub audit: Audit<f64>,
+    /// The mode at the last good state.
+    pub mode: Mode,
+    /// Its coordinates.
+    pub coords: Coordinates,
+    /// Shaft angle turned at the last good state, rad, CCW positive.
+    pub shaft_angle: f64,
+    /// How the run ended.
+    pub end: End,
+    /// Wall time of the whole run (stepping and files).
+    pub wall: Duration,
+    /// Wall time inside `Twin::step` only.
+    pub step_wall: Duration,
+}
+
+impl CccSummary {
+    /// The process exit code: 0 when the run reached `t_end` or ended as expected, 1
+    /// when a step failed otherwise.
+    pub fn exit_code(&self) -> u8 {
+        match self.end {
+            End::Completed | End::Stopped { expected: true, .. } => crate::EXIT_OK,
+            End::Stopped {
+                expected: false, ..
+            } => crate::EXIT_FAILURE,
+        }
+    }
+
+    /// Total events.
+    pub fn event_count(&self) -> u64 {
+        self.events.iter().map(|e| e.1).sum()
+    }
+
+    /// The audit residual relative to the motor work (`NaN` without motor work).
+    pub fn relative_residual(&self) -> f64 {
+        let w = self.audit.motor_work;
+        if w == 0.0 {
+            f64::NAN
+        } else {
+            self.audit.residual() / w.abs()
+        }
+    }
+
+    /// Nanoseconds per step inside `Twin::step`.
+    pub fn ns_per_step(&self) -> f64 {
+        self.step_wall.as_secs_f64() * 1e9 / self.steps.max(1) as f64
+    }
+
+    /// Nanoseconds per step of the whole run.
+    pub fn total_ns_per_step(&self) -> f64 {
+        self.wall.as_secs_f64() * 1e9 / self.steps.max(1) as f64
+    }
+}
+
+impl fmt::Display for CccSummary {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        writeln!(
+            f,
+            "scenario  {}: Constantinesco converter, {} ({})",
+            self.scenario.name(),
+            self.settings,
+            self.precision
+        )?;
+        writeln!(
+            f,
+            "steps     {} of h = {} s, t = 0 .. {:.6} s, {} CSV rows",
+            self.steps, self.h, self.time, self.rows
+        )?;
+        match &self.logs {
+            Some((e, s)) => writeln!(f, "logs      {e}, {s}")?,
+            None => writeln!(
+                f,
+                "logs      event and switch logs not written (CSV on stdout; use --out FILE)"
+            )?,
+        }
+        match self.first_breakaway {
+            Some(t) => writeln!(f, "breakaway first at t = {t:.6} s")?,
+            None => writeln!(f, "breakaway none")?,
+        }
+        write!(f, "events   ")?;
+        for (k, (name, n)) in self.events.iter().enumerate() {
+            let sep = if k == 0 { " " } else { ", " };
+            write!(f, "{sep}{name} {n}")?;
+        }
+        writeln!(f, " ({} in all)", self.event_count())?;
+        writeln!(f, "switches  {} coordinate switches", self.switches)?;
+        let a = &self.audit;
+        writeln!(
+            f,
+            "energy    motor work {:.6} J, Δ(K + V) {:.6} J (K + V: {:.6} -> {:.6} J), load work {:.6} J, impact losses {:.3e} J",
+            a.motor_work,
+            a.kinetic + a.potential - a.initial,
+            a.initial,
+            a.kinetic + a.potential,
+            a.load_work,
+            a.impact_loss
+        )?;
+        writeln!(
+            f,
+            "audit     residual motor work - Δ(K + V) - load work - impact losses = {:.3e} J, {:.3e} of the motor work",
+            a.residual(),
+            self.relative_residual()
+        )?;
+        writeln!(
+            f,
+            "impacts   {} plastic impacts, total loss {:.6e} J",
+            self.impacts, a.impact_loss
+        )?;
+        writeln!(
+            f,
+            "final     mode {} ({} coordinates) at t = {:.6} s, shaft angle {:.6} rad",
+            self.mode, self.coords, self.time, self.shaft_angle
+        )?;
+        match &self.end {
+            End::Completed => writeln!(f, "ended     reached t_end = {} s", self.t_end)?,
+            End::Stopped {
+                error,
+                expected: true,
+            } => writeln!(
+                f,
+                "ended     at the mechanism's singularity (the expected end of {}): {error}",
+                self.scenario.name()
+            )?,
+            End::Stopped {
+                error,
+                expected: false,
+            } => writeln!(f, "ended     step {} failed: {error}", self.steps + 1)?,
+        }
+        write!(
+            f,
+            "wall      {:.6} s: {:.0} ns/step in Twin::step, {:.0} ns/step with the files",
+            self.wall.as_secs_f64(),
+            self.ns_per_step(),
+            self.total_ns_per_step()
+        )
+    }
+}
+
+/// Runs the converter scenario of `opts` in scalar `T`: the state CSV to `csv`, the
+/// logs to `logs` (events, switches) when given. Every sink is flushed before
+/// returning, also when a step fails; a failed step is not an `Err` but the summary's
+/// [`End::Stopped`].
+pub fn simulate<T: Real>(
+    opts: &RunOptions,
+    csv: Sink<'_>,
+    mut logs: Option<(Sink<'_>, Sink<'_>)>,
+) -> Result<CccSummary, RunError> {
+    let precision = if core::mem::size_of::<T>() == 4 {
+        "f32"
+    } else {
+        "f64"
+    };
+    let name = opts.scenario.name();
+    let settings = opts
+        .scenario
+        .converter()
+        .ok_or_else(|| {
+            RunError::Setup(format!(
+                "{name} is not a converter scenario: run it with host_sim::simulate"
+            ))
+        })?
+        .with_options(opts);
+    let h64 = opts.h.unwrap_or(settings.h);
+    let t_end = opts.t_end.unwrap_or(settings.t_end);
+    let h = T::c(h64);
+    if !(h.finite() && h > T::zero()) {
+        return Err(RunError::Usage(UsageError(format!(
+            "--h: {h64} s is not a positive {precision}"
+        ))));
+    }
+    let n = step_count(h64, t_end).map_err(RunError::Usage)?;
+    let every = opts.every.max(1);
+
+    let mut params = CccParams::<T>::reference();
+    params.drive = settings.drive;
+    let mut ts = TwinSettings::reference(h);
+    ts.clutch = settings.clutch;
+    let inputs = Inputs {
+        motor: MotorInput::Law(Motor::Constant(T::c(settings.motor))),
+        load: T::c(settings.load),
+        measured: None,
+    };
+    let mut twin = Twin::new(params, ts, inputs)
+        .map_err(|e| RunError::Setup(format!("cannot set up {name}: {e}")))?;
+
+    let start = Instant::now();
+    let mut step_wall = Duration::ZERO;
+    let mut counts = [0u64; EVENT_KINDS.len()];
+    let mut first_breakaway = None;
+    let mut switches = 0u64;
+    let mut impacts = 0u64;
+
+    let Sink { w: out, target } = csv;
+    let csv_err = |error| RunError::Write {
+        target: target.clone(),
+        error,
+    };
+    writeln!(out, "{}", columns().join(",")).map_err(csv_err)?;
+    if let Some((ev, sw)) = logs.as_mut() {
+        writeln!(ev.w, "{}", EVENT_COLUMNS.join(",")).map_err(|e| ev.err(e))?;
+        writeln!(sw.w, "{}", SWITCH_COLUMNS.join(",")).map_err(|e| sw.err(e))?;
+    }
+    // The events of the setup (the start mode's choice) and of each step.
+    let mut record =
+        |twin: &Twin<T>, logs: &mut Option<(Sink<'_>, Sink<'_>)>| -> Result<(), RunError> {
+            for e in twin.events() {
+                if let Some(k) = EVENT_KINDS.iter().position(|k| *k == e.kind) {
+                    counts[k] += 1;
+                }
+                if e.impact_loss > T::zero() {
+                    impacts += 1;
+                }
+                if e.kind == EventKind::Breakaway && first_breakaway.is_none() {
+                    first_breakaway = Some(e.time.to_f64());
+                }
+                if let Some((ev, _)) = logs.as_mut() {
+                    writeln!(
+                        ev.w,
+                        "{},{},{},{},{},{},{},{}",
+                        e.time,
+                        e.kind.name(),
+                        e.from.name(),
+                        e.to.name(),
+                        e.c[0],
+                        e.c[1],
+                        e.impact_loss,
+                        e.mismatch
+                    )
+                    .map_err(|e| ev.err(e))?;
+                }
+            }
+            for s in twin.switches() {
+                switches += 1;
+                if let Some((_, sw)) = logs.as_mut() {
+                    writeln!(
+                        sw.w,
+                        "{},{},{},{},{},{}",
+                        s.time,
+                        s.mode.name(),
+                        s.from.name(),
+                        s.to.name(),
+                        s.conditioning[0],
+                        s.conditioning[1]
+                    )
+                    .map_err(|e| sw.err(e))?;
+                }
+            }
+            Ok(())
+        };
+    record(&twin, &mut logs)?;
+    write_row(out, &twin).map_err(csv_err)?;
+    let mut rows = 1u64;
+    let mut written = 0u64;
+    let mut steps = 0u64;
+    let mut end = End::Completed;
+    while steps < n {
+        let t0 = Instant::now();
+        let r = twin.step(&inputs);
+        step_wall += t0.elapsed();
+        if let Err(error) = r {
+            let expected =
+                opts.scenario == ScenarioId::CccS1 && matches!(error, TwinError::Mechanism { .. });
+            end = End::Stopped { error, expected };
+            break;
+        }
+        steps += 1;
+        record(&twin, &mut logs)?;
+        if steps % every == 0 || steps == n {
+            write_row(out, &twin).map_err(csv_err)?;
+            rows += 1;
+            written = steps;
+        }
+    }
+    if written != steps {
+        // The last good state before a failed step.
+        write_row(out, &twin).map_err(csv_err)?;
+        rows += 1;
+    }
+    out.flush().map_err(csv_err)?;
+    let log_names = match logs.as_mut() {
+        Some((ev, sw)) => {
+            ev.w.flush().map_err(|e| ev.err(e))?;
+            sw.w.flush().map_err(|e| sw.err(e))?;
+            Some((ev.target.clone(), sw.target.clone()))
+        }
+        None => None,
+    };
+    let wall = start.elapsed();
+    let a = twin.audit();
+    Ok(CccSummary {
+        scenario: opts.scenario,
+        settings,
+        precision,
+        h: h.to_f64(),
+        t_end,
+        steps,
+        time: twin.time().to_f64(),
+        rows,
+        logs: log_names,
+        events: EVENT_KINDS
+            .iter()
+            .zip(counts)
+            .map(|(k, n)| (k.name(), n))
+            .collect(),
+        first_breakaway,
+        switches,
+        impacts,
+        audit: Audit {
+            motor_work: a.motor_work.to_f64(),
+            load_work: a.load_work.to_f64(),
+            impact_loss: a.impact_loss.to_f64(),
+            kinetic: a.kinetic.to_f64(),
+            potential: a.potential.to_f64(),
+            initial: a.initial.to_f64(),
+        },
+        mode: twin.mode(),
+        coords: twin.coordinates(),
+        shaft_angle: twin.shaft_angle().to_f64(),
+        end,
+        wall,
+        step_wall,
+    })
+}
+
+/// Writes one state row (see [`columns`]), numbers in `{}` Display (shortest
+/// round-trip); cells past the mode's DOF are empty.
+pub fn write_row<T: Real>(w: &mut dyn Write, twin: &Twin<T>) -> io::Result<()> {
+    let mode = twin.mode();
+    write!(
+        w,
+        "{},{},{},{}",
+        twin.time(),
+        mode.name(),
+        mode.code(),
+        twin.coordinates().name()
+    )?;
+    for v in [twin.q(), twin.qd()] {
+        for j in 0..2 {
+            match v.get(j) {
+                Some(x) => write!(w, ",{x}")?,
+                None => w.write_all(b",")?,
+            }
+        }
+    }
+    for p in 1..=8 {
+        write!(w, ",{}", twin.link(p).theta)?;
+    }
+    for p in 1..=8 {
+        write!(w, ",{}", twin.link(p).omega)?;
+    }
+    let [c6, c8] = twin.clutch_torques();
+    write!(
+        w,
+        ",{},{},{c6},{c8},{}",
+        twin.shaft_speed(),
+        twin.shaft_angle(),
+        twin.motor_torque()
+    )?;
+    for r in twin.joint_reactions() {
+        write!(w, ",{}", r.norm())?;
+    }
+    let a = twin.audit();
+    writeln!(
+        w,
+        ",{},{},{},{},{},{}",
+        a.kinetic,
+        a.potential,
+        a.motor_work,
+        a.load_work,
+        a.impact_loss,
+        a.residual()
+    )
+}
+
+/// Runs `host-sim run ccc-*` with `opts`: the state CSV to the file (with the logs next
+/// to it) or `stdout` (no logs), the summary to the other stream (unless quiet), a
+/// failed step's error to `stderr`; returns the exit code.
+pub fn execute(opts: &RunOptions, stdout: &mut dyn Write, stderr: &mut dyn Write) -> u8 {
+    let result = match &opts.out {
+        Output::Stdout => dispatch(
+            opts,
+            Sink {
+                w: stdout,
+                target: "stdout".into(),
+            },
+            None,
+        )
+        .map(|s| (s, false)),
+        Output::File(path) => run_to_files(opts, path).map(|s| (s, true)),
+    };
+    match result {
+        Ok((summary, to_stdout)) => {
+            if !opts.quiet {
+                let to: &mut dyn Write = if to_stdout { stdout } else { stderr };
+                let _ = writeln!(to, "{summary}").and_then(|_| to.flush());
+            }
+            if let End::Stopped {
+                error,
+                expected: false,
+            } = &summary.end
+            {
+                let _ = writeln!(
+                    stderr,
+                    "host-sim: {}: step {} failed ({} rows written): {error}",
+                    opts.scenario.name(),
+                    summary.steps + 1,
+                    summary.rows
+                );
+            }
+            summary.exit_code()
+        }
+        Err(e) => crate::report_run_error(e, stderr),
+    }
+}
+
+fn run_to_files(opts: &RunOptions, path: &Path) -> Result<CccSummary, RunError> {
+    let (events, switches) = log_paths(path);
+    let create = |p: &Path| {
+        File::create(p)
+            .map(BufWriter::new)
+            .map_err(|error| RunError::Write {
+                target: p.display().to_string(),
+                error,
+            })
+    };
+    let mut csv = create(path)?;
+    let mut ev = create(&events)?;
+    let mut sw = create(&switches)?;
+    dispatch(
+        opts,
+        Sink {
+            w: &mut csv,
+            target: path.display().to_string(),
+        },
+        Some((
+            Sink {
+                w: &mut ev,
+                target: events.display().to_string(),
+            },
+            Sink {
+                w: &mut sw,
+                target: switches.display().to_string(),
+            },
+        )),
+    )
+}
+
+fn dispatch(
+    opts: &RunOptions,
+    csv: Sink<'_>,
+    logs: Option<(Sink<'_>, Sink<'_>)>,
+) -> Result<CccSummary, RunError> {
+    if opts.f32 {
+        simulate::<f32>(opts, csv, logs)
+    } else {
+        simulate::<f64>(opts, csv, logs)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn log_paths_beside_the_csv() {
+        let (e, s) = log_paths(Path::new("/tmp/run/s2.csv"));
+        assert_eq!(e, Path::new("/tmp/run/s2.events.csv"));
+        assert_eq!(s, Path::new("/tmp/run/s2.switches.csv"));
+        let (e, _) = log_paths(Path::new("out"));
+        assert_eq!(e, Path::new("out.events.csv"));
+    }
+
+    #[test]
+    fn columns_are_unique() {
+        let c = columns();
+        assert_eq!(c.len(), 46);
+        for (k, n) in c.iter().enumerate() {
+            assert!(!c[..k].contains(n), "{n} twice");
+        }
+    }
+
+    #[test]
+    fn event_kind_names_are_distinct() {
+        let names = EVENT_KINDS.map(EventKind::name);
+        for (k, n) in names.iter().enumerate() {
+            assert!(!names[..k].contains(n), "{n} twice");
+        }
+    }
+}

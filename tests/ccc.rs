@@ -1,0 +1,405 @@
+//! The Constantinesco converter's twin (SPEC 3) against independent oracles: SPEC's
+//! reference geometry, finite differences of every mode's transmission functions, the
+//! energy audit, the kinematics on both sides of every switch, the clutch laws in every
+//! mode, and the consistency conditions re-checked on the logged events.
+
+use structomat::ccc::{
+    initial_pose, mode_model, CccParams, Clutch, Coordinates, DriveDirection, Event, EventKind,
+    Inputs, Mode, MotorInput, Twin, TwinError, TwinSettings,
+};
+use structomat::kinematics::{assemble, position};
+use structomat::motor::Motor;
+use structomat::transmission::evaluate;
+use structomat::workspace::Workspace;
+use structomat_suite::{assert_close, central_diff4, pose};
+
+const T_R: f64 = 800.0;
+
+fn s2_inputs() -> Inputs<f64> {
+    Inputs {
+        motor: MotorInput::Law(Motor::Constant(12.0)),
+        load: T_R,
+        measured: None,
+    }
+}
+
+/// What a run of the twin logged.
+struct Run {
+    events: Vec<Event<f64>>,
+    switches: usize,
+    end: Option<TwinError>,
+    t_end: f64,
+    max_rel_residual: f64,
+    worst_gap: f64,
+    worst_speed_gap: f64,
+}
+
+/// Runs the twin to `t_end` or its first error, checking SPEC 3's clutch laws at every
+/// step (`check_laws`).
+fn run(
+    params: CccParams<f64>,
+    settings: TwinSettings<f64>,
+    inputs: Inputs<f64>,
+    t_end: f64,
+) -> Run {
+    let mut twin = Twin::new(params, settings, inputs).expect("the reference converter sets up");
+    let mut out = Run {
+        events: twin.events().to_vec(),
+        switches: 0,
+        end: None,
+        t_end: 0.0,
+        max_rel_residual: 0.0,
+        worst_gap: 0.0,
+        worst_speed_gap: 0.0,
+    };
+    let steps = (t_end / settings.h).round() as u64;
+    for _ in 0..steps {
+        if let Err(e) = twin.step(&inputs) {
+            out.end = Some(e);
+            break;
+        }
+        check_laws(&twin, inputs.load);
+        out.events.extend_from_slice(twin.events());
+        out.switches += twin.switches().len();
+        for s in twin.switches() {
+            out.worst_gap = out.worst_gap.max(s.position_gap);
+            out.worst_speed_gap = out.worst_speed_gap.max(s.speed_gap);
+        }
+        let a = twin.audit();
+        if a.motor_work > 1.0 {
+            out.max_rel_residual = out
+                .max_rel_residual
+                .max((a.residual() / a.motor_work).abs());
+        }
+    }
+    for e in &out.events {
+        out.worst_gap = out.worst_gap.max(e.position_gap);
+        out.worst_speed_gap = out.worst_speed_gap.max(e.speed_gap);
+    }
+    out.t_end = twin.time();
+    out
+}
+
+/// SPEC 3's laws of the diode in the twin's current state: in I modes locked levers
+/// stand still and 0 ≤ Σc ≤ T_r; in A modes engaged levers turn with the shaft in the
+/// drive direction with c ≥ 0; in jam everything is at rest; every output is finite.
+fn check_laws(twin: &Twin<f64>, load: f64) {
+    let d = twin.params().drive.sign::<f64>();
+    let mode = twin.mode();
+    let c = twin.clutch_torques();
+    let tol_c = 1e-6 * (load + 1.0);
+    let shaft = twin.shaft_speed();
+    let t = twin.time();
+    for p in 1..=8 {
+        let l = twin.link(p);
+        assert!(
+            l.theta.is_finite() && l.omega.is_finite() && l.alpha.is_finite(),
+            "t = {t}: link {p} not finite"
+        );
+    }
+    for (k, (lever, clutch)) in [6usize, 8].into_iter().zip(mode.clutches()).enumerate() {
+        let w = twin.link(lever).omega;
+        match clutch {
+            Clutch::Locked => {
+                assert_eq!(w, 0.0, "t = {t}: locked lever {lever} moves in {mode}");
+                assert!(
+                    c[k] >= -tol_c,
+                    "t = {t}: locked lever {lever} pulls: c = {}",
+                    c[k]
+                );
+            }
+            Clutch::Engaged => {
+                assert_close(w, shaft, 1e-12, 1e-12, "engaged lever turns with the shaft");
+                assert!(
+                    d * w >= -1e-9,
+                    "t = {t}: shaft turns against the drive: {w}"
+                );
+                assert!(
+                    c[k] >= -tol_c,
+                    "t = {t}: engaged lever {lever}: c = {}",
+                    c[k]
+                );
+            }
+            Clutch::Free => assert_eq!(c[k], 0.0, "a free lever transmits nothing"),
+        }
+    }
+    if !mode.shaft_turning() {
+        assert_eq!(shaft, 0.0);
+        assert!(
+            c[0] + c[1] <= load + tol_c,
+            "t = {t}: held shaft past T_r: {c:?}"
+        );
+    }
+    if mode == Mode::Jam {
+        for p in 1..=8 {
+            assert_eq!(twin.link(p).omega, 0.0, "t = {t}: link {p} moves in jam");
+        }
+    }
+}
+
+/// SPEC 3: C ≈ (0.2883, -0.0944), D ≈ (0.2441, 0.2528), G ≈ (0.8932, 0.2173),
+/// I ≈ (0.8083, -0.0700) at q1 = 105°, q2 = 90°; E = (0.2, 0.6).
+#[test]
+fn reference_geometry_matches_spec() {
+    let twin = Twin::new(
+        CccParams::reference(),
+        TwinSettings::reference(1e-4),
+        s2_inputs(),
+    )
+    .unwrap();
+    let at = |p: usize, k: usize| twin.joint_position(p, k);
+    for (what, got, want) in [
+        ("E", at(4, 1), (0.2, 0.6)),
+        ("C", at(3, 1), (0.2883, -0.0944)),
+        ("D", at(3, 2), (0.2441, 0.2528)),
+        ("G", at(6, 1), (0.8932, 0.2173)),
+        ("I", at(8, 1), (0.8083, -0.0700)),
+    ] {
+        assert_close(got.x, want.0, 0.0, 6e-5, what);
+        assert_close(got.y, want.1, 0.0, 6e-5, what);
+    }
+    // The same joint placed by the two links that share it.
+    for (what, a, b) in [
+        ("B", at(1, 1), at(2, 0)),
+        ("C", at(2, 1), at(3, 1)),
+        ("G", at(5, 1), at(6, 1)),
+        ("I", at(7, 1), at(8, 1)),
+        ("D5", at(5, 0), at(3, 2)),
+        ("D7", at(7, 0), at(3, 2)),
+    ] {
+        assert!((a - b).norm() < 1e-12, "{what}: {a:?} vs {b:?}");
+    }
+}
+
+/// Every mode's sequence, in each of its coordinate choices, against 4th-order central
+/// differences of the pose (SPEC 1's second method): V = ∂P/∂q.
+#[test]
+fn every_mode_transmission_functions_match_finite_differences() {
+    let params = CccParams::<f64>::reference();
+    let base = initial_pose(&params, 105f64.to_radians(), 90f64.to_radians()).unwrap();
+    let mut checked = 0;
+    for mode in Mode::ALL {
+        for &coords in mode.coordinate_choices() {
+            let (model, q0) = mode_model(&params, mode, coords, &base).unwrap();
+            let dof = model.dof();
+            let mut ws = Workspace::new();
+            assemble(&model, &mut ws, &q0[..dof]).unwrap();
+            let p0 = pose(&model, &ws, None);
+            if dof == 0 {
+                // Jam: a structure; it assembles where it was built.
+                assert_eq!(coords, Coordinates::Rest);
+                checked += 1;
+                continue;
+            }
+            let mut qd = [0.0; 2];
+            qd[0] = 1.0;
+            evaluate(&model, &mut ws, &q0[..dof], &qd[..dof], 0.0).unwrap();
+            for j in 0..dof {
+                let mut f = |x: f64| {
+                    let mut q = q0;
+                    q[j] = x;
+                    let mut w2 = ws.clone();
+                    position(&model, &mut w2, &q[..dof], 0.0).unwrap();
+                    pose(&model, &w2, Some(&p0))
+                };
+                // Step 1e-5: the rod choice of I6 sits near its own dead point here,
+                // where 1e-4 leaves 2e-5 of truncation error.
+                let fd = central_diff4(&mut f, q0[j], 1e-5);
+                for (row, d) in fd.iter().enumerate() {
+                    assert_close(
+                        ws.v[(row, j)],
+                        *d,
+                        1e-7,
+                        1e-7,
+                        &format!("{mode} {coords}: V[{row}, {j}]"),
+                    );
+                }
+            }
+            checked += 1;
+        }
+    }
+    // 4 two-DOF modes × 3 choices, I6 and I8 × 3, A68, jam.
+    assert_eq!(checked, 4 * 3 + 2 * 3 + 2);
+}
+
+fn s2(h: f64, t_end: f64, drive: DriveDirection) -> Run {
+    let mut p = CccParams::reference();
+    p.drive = drive;
+    run(p, TwinSettings::reference(h), s2_inputs(), t_end)
+}
+
+/// S2 at h = 1e-4 over its first 0.25 s (before the first breakaway, through mode I
+/// with the levers taking turns): the audit balances to 1e-6 of the motor's work at
+/// every step, every switch keeps the joints in place, and the laws hold (`run`).
+#[test]
+fn s2_mode_i_energy_audit_and_switches() {
+    let r = s2(1e-4, 0.25, DriveDirection::Cw);
+    assert!(r.end.is_none(), "{:?}", r.end);
+    assert!(
+        r.max_rel_residual < 1e-6,
+        "audit residual {:.3e}",
+        r.max_rel_residual
+    );
+    assert!(
+        r.worst_gap < 1e-12,
+        "joints move at a switch: {:.3e} m",
+        r.worst_gap
+    );
+    assert!(
+        r.worst_speed_gap < 1e-9,
+        "speeds jump at a switch: {:.3e}",
+        r.worst_speed_gap
+    );
+    assert!(
+        r.switches >= 1,
+        "the crank's dead points need a coordinate switch"
+    );
+    let kinds: Vec<_> = r.events.iter().map(|e| e.kind).collect();
+    assert_eq!(kinds.first(), Some(&EventKind::Start));
+    assert!(kinds.contains(&EventKind::Catch(6)) && kinds.contains(&EventKind::Release(8)));
+}
+
+/// SPEC 3's consistency conditions re-checked on the logged events of S2 up to the
+/// first breakaways: the new mode's locked or engaged levers transmit c ≥ 0, a held
+/// shaft carries at most T_r, and every event flagged consistent has them; the events
+/// come in time order and the first breakaway goes to an A mode.
+#[test]
+fn s2_events_are_consistent() {
+    let r = s2(1e-4, 0.3, DriveDirection::Cw);
+    let mut last = -1.0;
+    let mut breakaway = None;
+    for e in &r.events {
+        assert!(e.time >= last, "events out of order");
+        last = e.time;
+        if !e.consistent {
+            continue;
+        }
+        for (k, clutch) in e.to.clutches().into_iter().enumerate() {
+            if clutch != Clutch::Free {
+                assert!(e.c[k] >= -1e-6 * T_R, "{e:?}");
+            }
+        }
+        if !e.to.shaft_turning() {
+            assert!(e.c[0] + e.c[1] <= T_R * (1.0 + 1e-9), "{e:?}");
+        }
+        if e.kind == EventKind::Breakaway {
+            assert!(e.to.shaft_turning(), "{e:?}");
+        }
+        if e.to.shaft_turning() && breakaway.is_none() {
+            breakaway = Some(e.time);
+        }
+    }
+    let t = breakaway.expect("the shaft turns within 0.3 s");
+    assert!((0.1..0.3).contains(&t), "first breakaway at {t}");
+}
+
+/// Halving the step moves the events of mode I and the first breakaway by less than
+/// SPEC's bounds (1e-4 s, and 1e-5 s for the breakaway).
+#[test]
+fn s2_events_converge_with_the_step() {
+    let a = s2(1e-4, 0.3, DriveDirection::Cw);
+    let b = s2(5e-5, 0.3, DriveDirection::Cw);
+    let key = |r: &Run| -> Vec<(EventKind, Mode, f64)> {
+        r.events.iter().map(|e| (e.kind, e.to, e.time)).collect()
+    };
+    let (ka, kb) = (key(&a), key(&b));
+    let n = ka.len().min(kb.len());
+    assert!(n >= 10, "too few events to compare: {ka:?}");
+    for (x, y) in ka.iter().zip(kb.iter()).take(n) {
+        assert_eq!(
+            (x.0, x.1),
+            (y.0, y.1),
+            "event sequences differ: {ka:?} vs {kb:?}"
+        );
+        assert!((x.2 - y.2).abs() < 1e-4, "{x:?} vs {y:?}");
+    }
+    let first = |r: &Run| {
+        r.events
+            .iter()
+            .find(|e| e.to.shaft_turning())
+            .map(|e| e.time)
+            .expect("the shaft turns within the run")
+    };
+    let (x, y) = (first(&a), first(&b));
+    assert!((x - y).abs() < 1e-5, "first breakaway {x} vs {y}");
+}
+
+/// S1 (free, 12 N·m, no load): ends at a singularity of the mechanism before 0.6 s, with
+/// an error naming the diode's groups and the time; nothing is NaN before it.
+#[test]
+fn s1_ends_at_the_mechanism_singularity() {
+    let mut s = TwinSettings::reference(1e-4);
+    s.clutch = false;
+    let inputs = Inputs {
+        motor: MotorInput::Law(Motor::Constant(12.0)),
+        load: 0.0,
+        measured: None,
+    };
+    let r = run(CccParams::reference(), s, inputs, 0.6);
+    let Some(TwinError::Mechanism { time, failures, .. }) = &r.end else {
+        panic!("S1 should end at a mechanism singularity, got {:?}", r.end);
+    };
+    assert!(
+        *time < 0.6 && (time - r.t_end).abs() < 1e-4 + 1e-9,
+        "{time} vs {}",
+        r.t_end
+    );
+    assert!(!failures.is_empty());
+    let msg = r.end.as_ref().unwrap().to_string();
+    assert!(
+        msg.contains("RRR(5,6)") || msg.contains("RRR(7,8)"),
+        "{msg}"
+    );
+    assert!(msg.contains("t = "), "{msg}");
+    assert!(r.events.iter().all(|e| e.kind == EventKind::Start) && r.events.is_empty());
+}
+
+/// The CCW converter runs too: its rocker's weight alone beats T_r on both levers, so
+/// it starts in A68 (c6 + c8 = T_r, both ≥ 0) and creeps; same laws, same audit.
+#[test]
+fn s2_ccw_runs() {
+    let r = s2(1e-4, 0.09, DriveDirection::Ccw);
+    assert!(r.end.is_none(), "{:?}", r.end);
+    assert!(
+        r.max_rel_residual < 1e-6,
+        "audit residual {:.3e}",
+        r.max_rel_residual
+    );
+    let start = r.events.first().expect("the start event");
+    assert_eq!((start.kind, start.to), (EventKind::Start, Mode::A68));
+    assert_close(start.c[0] + start.c[1], T_R, 1e-12, 0.0, "A68 carries T_r");
+}
+
+/// A failed step keeps the last good state: a non-finite load is refused before
+/// anything moves, and the twin steps on afterwards as if nothing happened.
+#[test]
+fn bad_inputs_leave_the_state() {
+    let inputs = s2_inputs();
+    let mut a = Twin::new(
+        CccParams::reference(),
+        TwinSettings::reference(1e-4),
+        inputs,
+    )
+    .unwrap();
+    let mut b = a.clone();
+    for _ in 0..10 {
+        a.step(&inputs).unwrap();
+        b.step(&inputs).unwrap();
+    }
+    let bad = Inputs {
+        load: f64::NAN,
+        ..inputs
+    };
+    assert!(matches!(b.step(&bad), Err(TwinError::Setting(_))));
+    let neg = Inputs {
+        load: -1.0,
+        ..inputs
+    };
+    assert!(b.step(&neg).is_err());
+    assert_eq!(a.time(), b.time());
+    a.step(&inputs).unwrap();
+    b.step(&inputs).unwrap();
+    assert_eq!(a.q(), b.q());
+    assert_eq!(a.qd(), b.qd());
+    assert_eq!(a.mode(), b.mode());
+}
