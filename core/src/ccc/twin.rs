@@ -457,7 +457,7 @@ impl<T: Real> Twin<T> {
                 }
             }
             let g0 = self.guards;
-            self.finish(w, inputs)?;
+            self.finish_evaluated(w, inputs)?;
             let fired = fired(&g0, &self.guards);
             if fired == 0 || events >= MAX_EVENTS_PER_STEP || !self.settings.clutch {
                 break;
@@ -527,6 +527,12 @@ impl<T: Real> Twin<T> {
         self.slot
             .eval(w.t, &w.y, inputs, self.drive)
             .map_err(|e| self.physical_error(e))?;
+        self.finish_evaluated(w, inputs)
+    }
+
+    /// [`Twin::finish`] when the slot's workspace already holds the evaluation of `w`'s
+    /// state (after an accepted DP5 step, whose last stage is `f(t1, y1)`, FSAL).
+    fn finish_evaluated(&mut self, w: &Work<T>, inputs: &Inputs<T>) -> Result<(), TwinError> {
         finish_accelerations(&self.slot.model, &mut self.slot.ws);
         reactions(&self.slot.model, &mut self.slot.ws, w.t.to_f64())
             .map_err(|e| self.physical_error(e))?;
