@@ -4,7 +4,8 @@
 //!    (`P = o + R(θ) p`), prismatic points on their lines at their constant angles; the
 //!    closed forms against the Newton second method started from perturbed unknowns;
 //!    both assembly branches of the closed-form dyads against circle/line intersections
-//!    computed here; the triad against the configuration it was constructed from;
+//!    computed here; the triad against the configuration it was constructed from; the
+//!    six-link Assur group found back from guesses 0.05 rad off;
 //! 2. velocity: `V = ∂P/∂q` and each group's `∂x/∂q` against 4th-order central
 //!    differences of positions (thesis eq. 5.12, step 1e-4);
 //! 3. acceleration: `a_b` at `q̇ = e_j` and each group's `ẍ` bias against central second
@@ -26,6 +27,7 @@
 //! | inclined Scotch yoke | `Z(0) + R(1) + RTT(2,3)` |
 //! | slider on a 30° incline driving a dyad | `Z(0) + T(1) + RRR(2,3)` |
 //! | crank driving a triad | `Z(0) + R(1) + RR-RR-RR(2,3,4,5)` |
+//! | the converter in mode A68, crank-driven: a six-link Assur group | `Z(0) + R(1) + ASSUR(2,3,4,5,6,7)` |
 //! | crank with a slider driven along it, 2 DOF | `Z(0) + R(1) + T(2) + RRR(3,4)` |
 //!
 //! Run with `--nocapture` to see the worst error of every check.
@@ -135,7 +137,7 @@ enum TJ {
 /// in each kind's file), else a length.
 fn var_is_angle(kind: GroupKind, k: usize) -> bool {
     match kind {
-        GroupKind::Rrr | GroupKind::Triad => true,
+        GroupKind::Rrr | GroupKind::Triad | GroupKind::Assur => true,
         GroupKind::Rrt | GroupKind::Rtr => k == 0,
         GroupKind::Trt | GroupKind::Rtt => false,
         GroupKind::MotorR | GroupKind::MotorT => unreachable!("motor elements have no unknowns"),
@@ -947,8 +949,146 @@ fn m_two_dof(drive: bool) -> Mech {
 }
 
 /// The 1-DOF mechanisms (each a builder taking an optional constant drive).
+/// `Z(0) + R(1) + ASSUR(2,3,4,5,6,7)`: the converter of SPEC 3 in mode A68 driven by
+/// its crank, as one general Assur group of 6 links and 9 revolute joints.
+///
+/// ```text
+///   F o        E  rocker 3 (E -> C, D at its midpoint)     rod 5 (D -> G)   G
+///      \ 4 ___o________o D ____________________________________o  \
+///             \         \___ rod 7 (D -> I) ___________ I o   o H  levers 6+8 as
+///   A o-- 1 --o B -- 2 --o C                                       one body (H, G, I)
+/// ```
+/// SPEC 3's lengths and ground points (A = (0, 0), F = (0.2, 0.5), H = (1.1, 0)), the
+/// levers joined at the angle they have at q1 = 105°, q2 = 90° (so I = H + 0.3 at that
+/// angle in the joined body's frame). Plain bars of made-up masses. The group is solved
+/// by Newton on 3 loops from B: to F, and to H through each rod and lever.
+fn m_assur(drive: Option<f64>) -> Mech {
+    use structomat::ccc::{initial_pose, CccParams};
+    use structomat::structomat::{AssurGroup, AssurJoint, AssurLoop, AssurStep};
+    let p = CccParams::<f64>::reference();
+    let pose = initial_pose(&p, deg(105.0), deg(90.0)).unwrap();
+    let d = pose[8] - pose[6];
+    let i_local = [0.3 * d.cos(), 0.3 * d.sin()];
+    let mut b = ModelBuilder::<f64>::new();
+    let a = b.ground_point(0.0, 0.0).unwrap();
+    let f = b.ground_point(0.2, 0.5).unwrap();
+    let h = b.ground_point(1.1, 0.0).unwrap();
+    let crank = b.link(Link::bar(0.075, 0.7, 1.0e-3, 0.0375)).unwrap();
+    let coupler = b.link(Link::bar(0.35, 2.9, 0.033, 0.175)).unwrap();
+    let mut r = Link::bar(0.70, 5.5, 0.24, 0.35);
+    let rocker_d = r.add_point(Vec2::new(0.35, 0.0)).unwrap();
+    let rocker = b.link(r).unwrap();
+    let swing = b.link(Link::bar(0.10, 0.9, 1.0e-3, 0.05)).unwrap();
+    let rod5 = b.link(Link::bar(0.65, 5.3, 0.196, 0.325)).unwrap();
+    let mut l = Link::bar(0.30, 5.0, 0.05, 0.1);
+    let lever_i = l.add_point(Vec2::new(i_local[0], i_local[1])).unwrap();
+    let lever = b.link(l).unwrap();
+    let rod7 = b.link(Link::bar(0.65, 5.3, 0.196, 0.325)).unwrap();
+    b.group(&MotorR {
+        link: crank,
+        pivot: a,
+        link_point: 0,
+        coord: 0,
+        offset: 0.0,
+    })
+    .unwrap();
+    let (l2, l3, l4, l5, l7, l6) = (0, 1, 2, 3, 4, 5);
+    let st = |link: u8, from: u8, to: u8| AssurStep { link, from, to };
+    let to_f = [st(l2, 0, 1), st(l3, 1, 0), st(l4, 1, 0)];
+    let to_h6 = [
+        st(l2, 0, 1),
+        st(l3, 1, rocker_d),
+        st(l5, 0, 1),
+        st(l6, 1, 0),
+    ];
+    let to_h8 = [
+        st(l2, 0, 1),
+        st(l3, 1, rocker_d),
+        st(l7, 0, 1),
+        st(l6, lever_i, 0),
+    ];
+    let pt = |body: u8, point: u8| PointRef { body, point };
+    let jt = |link: u8, at: u8, other: PointRef| AssurJoint { link, at, other };
+    let bb = pt(crank, 1);
+    let off = 0.05;
+    b.group(&AssurGroup {
+        links: &[coupler, rocker, swing, rod5, rod7, lever],
+        loops: &[
+            AssurLoop {
+                start: bb,
+                steps: &to_f,
+                end: f,
+            },
+            AssurLoop {
+                start: bb,
+                steps: &to_h6,
+                end: h,
+            },
+            AssurLoop {
+                start: bb,
+                steps: &to_h8,
+                end: h,
+            },
+        ],
+        joints: &[
+            jt(coupler, 0, bb),
+            jt(rocker, 1, pt(coupler, 1)),
+            jt(swing, 1, pt(rocker, 0)),
+            jt(swing, 0, f),
+            jt(rod5, 0, pt(rocker, rocker_d)),
+            jt(rod7, 0, pt(rocker, rocker_d)),
+            jt(lever, 1, pt(rod5, 1)),
+            jt(lever, lever_i, pt(rod7, 1)),
+            jt(lever, 0, h),
+        ],
+        // 0.05 rad off the pose: Newton finds it back.
+        guess: &[
+            pose[2] + off,
+            pose[3] - off,
+            pose[4] + off,
+            pose[5] - off,
+            pose[7] + off,
+            pose[6] - off,
+        ],
+    })
+    .unwrap();
+    if let Some(t) = drive {
+        b.drive(0, Motor::Constant(t)).unwrap();
+    }
+    let rev = |a: u8, pa: P2, b: u8, pb: P2| TJ::Rev { a, pa, b, pb };
+    let joints = vec![
+        rev(1, [0.0, 0.0], 0, [0.0, 0.0]),
+        rev(1, [0.075, 0.0], 2, [0.0, 0.0]),
+        rev(2, [0.35, 0.0], 3, [0.70, 0.0]),
+        rev(3, [0.0, 0.0], 4, [0.10, 0.0]),
+        rev(4, [0.0, 0.0], 0, [0.2, 0.5]),
+        rev(5, [0.0, 0.0], 3, [0.35, 0.0]),
+        rev(7, [0.0, 0.0], 3, [0.35, 0.0]),
+        rev(5, [0.65, 0.0], 6, [0.30, 0.0]),
+        rev(7, [0.65, 0.0], 6, i_local),
+        rev(6, [0.0, 0.0], 0, [1.1, 0.0]),
+    ];
+    let q0 = deg(105.0);
+    Mech {
+        name: "R+ASSUR (converter A68)",
+        model: b.build().unwrap(),
+        joints,
+        formula: "Z(0) + R(1) + ASSUR(2,3,4,5,6,7)",
+        qs: [0.0, -0.15, -0.3, 0.15, 0.3]
+            .iter()
+            .map(|&dq| vec![q0 + dq])
+            .collect(),
+        // The crank's range in A68 is about [0.8, 4.86] rad (it reverses at both ends),
+        // with a shallow well of the weights near 3.38 rad (0.04 J deep towards 3.9 rad):
+        // the dynamics runs swing in it, slowly.
+        q0: vec![3.38],
+        qd0: vec![0.3],
+        drives: vec![0.05],
+    }
+}
+
 fn one_dof() -> Vec<fn(Option<f64>) -> Mech> {
-    vec![m_rrt, m_rtr, m_trt, m_rtt, m_trrr, m_triad]
+    vec![m_rrt, m_rtr, m_trt, m_rtt, m_trrr, m_triad, m_assur]
 }
 
 // ---------------------------------------------------------------------------------------

@@ -14,21 +14,22 @@ pub const MAX_LINK_POINTS: usize = 6;
 /// Fixed points on the ground (the zero-pole).
 pub const MAX_GROUND_POINTS: usize = 12;
 /// Groups (structomats) in a motion-transmission sequence.
-pub const MAX_GROUPS: usize = 12;
+pub const MAX_GROUPS: usize = 8;
 /// Degrees of freedom (generalized coordinates) of a mechanism.
 pub const MAX_DOF: usize = 3;
 /// Size of the integrated state `[q, q̇]`.
 pub const STATE_DIM: usize = 2 * MAX_DOF;
-/// Links in one group: 4 for the triad RR-RR-RR.
-pub const MAX_GROUP_LINKS: usize = 4;
-/// Unknowns of one group (link angles, slider offsets): 4 for the triad.
-pub const MAX_GROUP_VARS: usize = 4;
-/// Vector chains of one group: two closing loops for the triad.
-pub const MAX_CHAINS: usize = 2;
+/// Links in one group: 4 for the triad RR-RR-RR, 6 for the converter's A68 group.
+pub const MAX_GROUP_LINKS: usize = 6;
+/// Unknowns of one group (link angles, slider offsets): 4 for the triad, 6 for the
+/// converter's crank-driven A68 group (see [`AssurGroup`](crate::structomat::AssurGroup)).
+pub const MAX_GROUP_VARS: usize = 6;
+/// Vector chains of one group: two closing loops for the triad, three for A68's group.
+pub const MAX_CHAINS: usize = 3;
 /// Terms (rotating arms and slides) in one chain.
 pub const MAX_TERMS: usize = 4;
-/// Joints of one group: 6 revolute joints for the triad.
-pub const MAX_GROUP_JOINTS: usize = 6;
+/// Joints of one group: 6 revolute joints for the triad, 9 for A68's group.
+pub const MAX_GROUP_JOINTS: usize = 9;
 /// Rows of the stacked pose vector `P` (`x_G, y_G, θ` per moving link).
 pub const POSE_ROWS: usize = 3 * MAX_LINKS;
 /// External loads (force and moment on a link) in a model.

@@ -12,7 +12,7 @@ pub struct GroupId {
     /// Kind of structomat.
     pub kind: GroupKind,
     /// Link numbers (bodies `1..`), `links[..count]`.
-    pub links: [u8; 4],
+    pub links: [u8; crate::config::MAX_GROUP_LINKS],
     /// Number of links.
     pub count: u8,
 }

@@ -13,7 +13,7 @@ use crate::workspace::{BodyState, Workspace};
 
 /// The identity of group `index` for error messages.
 pub fn group_id<T: Real>(g: &Group<T>, index: usize) -> GroupId {
-    let mut links = [0u8; 4];
+    let mut links = [0u8; crate::config::MAX_GROUP_LINKS];
     let mut count = 0u8;
     for (slot, l) in links.iter_mut().zip(g.links()) {
         *slot = l;
@@ -53,7 +53,7 @@ fn solve_group<T: Real>(
         GroupKind::Rrt => dyad_rrt::solve(g, gd, model, bodies)?,
         GroupKind::Rtr => dyad_rtr::solve(g, gd, model, bodies)?,
         // Linear loop closures (TRT, RTT): one Newton step from anywhere is exact.
-        GroupKind::Trt | GroupKind::Rtt | GroupKind::Triad => {
+        GroupKind::Trt | GroupKind::Rtt | GroupKind::Triad | GroupKind::Assur => {
             return newton::solve(g, gd, model, bodies, q)
         }
     }
@@ -97,7 +97,7 @@ fn position_by<T: Real>(
     let Workspace { body, group, .. } = ws;
     for (i, (g, gd)) in model.groups().iter().zip(group.iter_mut()).enumerate() {
         let det = solve(g, gd, model, body, q).map_err(|f| fail(g, i, time, f))?;
-        if g.kind == GroupKind::Triad && det * gd.det_sign < T::zero() {
+        if !g.has_closed_form() && det * gd.det_sign < T::zero() {
             return Err(fail(g, i, time, GroupFault::BranchJump));
         }
     }

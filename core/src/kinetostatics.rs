@@ -8,7 +8,7 @@
 //! Applied motor torques are *not* among the loads: the driving torques are unknowns,
 //! so that in a forward-dynamics run they must come out equal to the applied ones.
 
-use crate::config::{MAX_BODIES, POSE_ROWS};
+use crate::config::{MAX_BODIES, MAX_GROUP_LINKS, POSE_ROWS};
 use crate::dynamics::{add_external_loads, add_load, mass_times};
 use crate::error::{GroupFault, StepError};
 use crate::kinematics::group_id;
@@ -110,12 +110,14 @@ pub fn reactions<T: Real>(
 ) -> Result<(), StepError> {
     let mut loads = free_body_loads(model, ws);
     for (gi, g) in model.groups().iter().enumerate().rev() {
-        let sol: Option<([T; 12], usize)> = if g.placements.len() <= 2 {
-            solve_group::<T, 6>(model, ws, g, &loads).map(|s| (pad(s.as_slice()), 6))
-        } else {
-            solve_group::<T, 12>(model, ws, g, &loads).map(|s| (pad(s.as_slice()), 12))
+        // Sized to the group: 6 unknowns for a dyad, 12 for a triad, 18 for a
+        // six-link Assur group (3 equations per link).
+        let sol: Option<[T; GROUP_ROWS]> = match g.placements.len() {
+            0..=2 => solve_group::<T, 6>(model, ws, g, &loads).map(|s| pad(s.as_slice())),
+            3..=4 => solve_group::<T, 12>(model, ws, g, &loads).map(|s| pad(s.as_slice())),
+            _ => solve_group::<T, GROUP_ROWS>(model, ws, g, &loads).map(|s| pad(s.as_slice())),
         };
-        let Some((lam, _)) = sol.filter(|(l, _)| l.iter().all(|v| v.finite())) else {
+        let Some(lam) = sol.filter(|l| l.iter().all(|v| v.finite())) else {
             return Err(StepError::Group {
                 time,
                 group: group_id(g, gi),
@@ -148,8 +150,15 @@ pub fn reactions<T: Real>(
     Ok(())
 }
 
-fn pad<T: Real>(s: &[T]) -> [T; 12] {
-    let mut out = [T::zero(); 12];
+/// Equilibrium rows of the largest group: 3 per link.
+const GROUP_ROWS: usize = 3 * MAX_GROUP_LINKS;
+const _: () = assert!(
+    MAX_GROUP_LINKS == 6,
+    "solve sizes above cover 2, 4 and 6 links"
+);
+
+fn pad<T: Real>(s: &[T]) -> [T; GROUP_ROWS] {
+    let mut out = [T::zero(); GROUP_ROWS];
     for (o, v) in out.iter_mut().zip(s.iter()) {
         *o = *v;
     }

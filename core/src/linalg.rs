@@ -51,3 +51,61 @@ pub fn solve<T: Real, const N: usize>(
     }
     Some(b)
 }
+
+/// Inverts the top-left `n × n` block of `a` by Gauss-Jordan elimination with partial
+/// pivoting; the rest of the result is the identity. Returns the inverse and the
+/// block's determinant, or `None` if a pivot vanishes or is not finite. Bounded work:
+/// `n³` multiply-adds, no iteration (a group's Jacobian `W`, `n` ≤ 6).
+pub fn invert<T: Real, const N: usize>(
+    mut a: SMatrix<T, N, N>,
+    n: usize,
+) -> Option<(SMatrix<T, N, N>, T)> {
+    let n = n.min(N);
+    let mut inv = SMatrix::<T, N, N>::identity();
+    let mut det = T::one();
+    for k in 0..n {
+        let mut p = k;
+        let mut best = T::zero();
+        for r in k..n {
+            let v = a.get((r, k))?.abs();
+            if v > best {
+                best = v;
+                p = r;
+            }
+        }
+        if !(best > T::zero()) || !best.finite() {
+            return None;
+        }
+        if p != k {
+            a.swap_rows(k, p);
+            inv.swap_rows(k, p);
+            det = -det;
+        }
+        let piv = *a.get((k, k))?;
+        det *= piv;
+        let ip = T::one() / piv;
+        for c in 0..n {
+            *a.get_mut((k, c))? *= ip;
+            *inv.get_mut((k, c))? *= ip;
+        }
+        for r in 0..n {
+            if r == k {
+                continue;
+            }
+            let f = *a.get((r, k))?;
+            if f == T::zero() {
+                continue;
+            }
+            for c in 0..n {
+                let akc = *a.get((k, c))?;
+                let ikc = *inv.get((k, c))?;
+                *a.get_mut((r, c))? -= f * akc;
+                *inv.get_mut((r, c))? -= f * ikc;
+            }
+        }
+    }
+    if !det.finite() {
+        return None;
+    }
+    Some((inv, det))
+}

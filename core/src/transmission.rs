@@ -105,7 +105,9 @@ pub fn evaluate<T: Real>(
     }
     for gd in ws.group.iter_mut().take(model.groups().len()) {
         let xd = gd.dx_dq * rates_v;
-        gd.xd = [xd[0], xd[1], xd[2], xd[3]];
+        for (dst, v) in gd.xd.iter_mut().zip(xd.iter()) {
+            *dst = *v;
+        }
     }
     let zero = [T::zero(); MAX_DOF];
     acceleration(model, ws, qd, &zero);

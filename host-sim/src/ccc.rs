@@ -3,7 +3,7 @@
 //! the coordinate switches, and the summary (events, energy audit, how the run ended).
 //!
 //! Exit codes: 0 when the run reaches `t_end`, and for `ccc-s1` also when it ends at a
-//! singularity of the mechanism ([`TwinError::Mechanism`]): that is S1's expected end
+//! singularity of the mechanism ([`TwinError::at_singularity`]): that is S1's expected end
 //! (SPEC 3), reported in the summary. Any other failed step is exit code 1, after the
 //! rows and log lines before it are written and the summary is printed.
 
@@ -233,8 +233,10 @@ pub struct CccSummary {
     pub logs: Option<(String, String)>,
     /// Events by kind, in [`EVENT_KINDS`] order: `(name, count)`.
     pub events: Vec<(&'static str, u64)>,
-    /// Time of the first breakaway event, s.
-    pub first_breakaway: Option<f64>,
+    /// The first breakaway: the first event that starts the held shaft (a breakaway
+    /// event, or a catch that the shaft must yield to, as at a crank dead point):
+    /// time, s, and the event's name.
+    pub first_breakaway: Option<(f64, &'static str)>,
     /// Coordinate switches.
     pub switches: u64,
     /// Events with a plastic impact (a kinetic energy loss > 0).
@@ -315,7 +317,7 @@ impl fmt::Display for CccSummary {
             )?,
         }
         match self.first_breakaway {
-            Some(t) => writeln!(f, "breakaway first at t = {t:.6} s")?,
+            Some((t, by)) => writeln!(f, "breakaway first at t = {t:.6} s ({by})")?,
             None => writeln!(f, "breakaway none")?,
         }
         write!(f, "events   ")?;
@@ -451,8 +453,9 @@ pub fn simulate<T: Real>(
                 if e.impact_loss > T::zero() {
                     impacts += 1;
                 }
-                if e.kind == EventKind::Breakaway && first_breakaway.is_none() {
-                    first_breakaway = Some(e.time.to_f64());
+                let starts_shaft = !e.from.shaft_turning() && e.to.shaft_turning();
+                if starts_shaft && first_breakaway.is_none() {
+                    first_breakaway = Some((e.time.to_f64(), e.kind.name()));
                 }
                 if let Some((ev, _)) = logs.as_mut() {
                     writeln!(
@@ -499,8 +502,7 @@ pub fn simulate<T: Real>(
         let r = twin.step(&inputs);
         step_wall += t0.elapsed();
         if let Err(error) = r {
-            let expected =
-                opts.scenario == ScenarioId::CccS1 && matches!(error, TwinError::Mechanism { .. });
+            let expected = opts.scenario == ScenarioId::CccS1 && error.at_singularity();
             end = End::Stopped { error, expected };
             break;
         }

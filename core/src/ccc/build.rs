@@ -16,7 +16,9 @@ use crate::config::MAX_BODIES;
 use crate::error::ModelError;
 use crate::model::{Link, Model, ModelBuilder};
 use crate::scalar::{Real, Vec2};
-use crate::structomat::{DyadRrr, MotorR, PointRef, TriadRrRrRr};
+use crate::structomat::{
+    AssurGroup, AssurJoint, AssurLoop, AssurStep, DyadRrr, MotorR, PointRef, TriadRrRrRr,
+};
 
 /// Physical link numbers (SPEC 3).
 pub(crate) const CRANK: usize = 1;
@@ -244,6 +246,86 @@ pub(crate) fn build<T: Real>(
             motor(&mut b, ROCKER, pt(SWING, P1), P0, 1)?;
             crank_from_c(&mut b)?;
             map.coord_link = [SWING as u8, ROCKER as u8];
+        }
+        Coordinates::Crank if joined => {
+            // A68 driven by its crank (SPEC 3: crank reversals happen in A68 too, and
+            // the lever cannot carry the crank through them): R(1) + the six-link
+            // Assur group of links 2, 3, 4, 5, 7 and the joined levers, 9 joints.
+            motor(&mut b, CRANK, a, P0, 0)?;
+            let (rod5, lever6) = BRANCHES[0];
+            let (rod7, _) = BRANCHES[1];
+            let links = [
+                body(COUPLER),
+                body(ROCKER),
+                body(SWING),
+                body(rod5),
+                body(rod7),
+                body(lever6),
+            ];
+            let (l2, l3, l4, l5, l7, l6) = (0, 1, 2, 3, 4, 5);
+            let step = |link: u8, from: u8, to: u8| AssurStep { link, from, to };
+            // From B: to F through the rocker and swing link, and to H through each
+            // rod and its lever.
+            let to_f = [step(l2, P0, P1), step(l3, P1, P0), step(l4, P1, P0)];
+            let to_h6 = [
+                step(l2, P0, P1),
+                step(l3, P1, ROCKER_D),
+                step(l5, P0, P1),
+                step(l6, P1, P0),
+            ];
+            let to_h8 = [
+                step(l2, P0, P1),
+                step(l3, P1, ROCKER_D),
+                step(l7, P0, P1),
+                step(l6, JOINED_I, P0),
+            ];
+            let start = pt(CRANK, P1);
+            let joint = |link: usize, at: u8, other: PointRef| AssurJoint {
+                link: body(link),
+                at,
+                other,
+            };
+            b.group(&AssurGroup {
+                links: &links,
+                loops: &[
+                    AssurLoop {
+                        start,
+                        steps: &to_f,
+                        end: f,
+                    },
+                    AssurLoop {
+                        start,
+                        steps: &to_h6,
+                        end: h,
+                    },
+                    AssurLoop {
+                        start,
+                        steps: &to_h8,
+                        end: h,
+                    },
+                ],
+                joints: &[
+                    joint(COUPLER, P0, pt(CRANK, P1)),
+                    joint(ROCKER, P1, pt(COUPLER, P1)),
+                    joint(SWING, P1, pt(ROCKER, P0)),
+                    joint(SWING, P0, f),
+                    joint(rod5, P0, pt(ROCKER, ROCKER_D)),
+                    joint(rod7, P0, pt(ROCKER, ROCKER_D)),
+                    joint(lever6, P1, pt(rod5, P1)),
+                    joint(lever6, JOINED_I, pt(rod7, P1)),
+                    joint(lever6, P0, h),
+                ],
+                guess: &[
+                    th(COUPLER),
+                    th(ROCKER),
+                    th(SWING),
+                    th(rod5),
+                    th(rod7),
+                    th(lever6),
+                ],
+            })?;
+            map.coord_link = [CRANK as u8, 0];
+            return b.build().map(|m| (m, map));
         }
         Coordinates::Crank | Coordinates::Swing | Coordinates::Rod => {
             let Some(k) = locked.filter(|_| mode.dof() == 1) else {

@@ -99,7 +99,7 @@ impl Mode {
         match self {
             Mode::Free | Mode::I0 | Mode::A6 | Mode::A8 => &[CrankSwing, CrankCoupler, SwingRocker],
             Mode::I6 | Mode::I8 => &[Crank, Swing, Rod],
-            Mode::A68 => &[Lever],
+            Mode::A68 => &[Lever, Crank],
             Mode::Jam => &[Rest],
         }
     }
@@ -141,8 +141,10 @@ pub enum Coordinates {
     CrankCoupler,
     /// 2 DOF, `(θ4, θ3)`: R(4) + R(3) on E + RRR(1,2) + the diode dyads.
     SwingRocker,
-    /// 1 DOF (I6, I8), `θ1`: R(1) + triad RR-RR-RR(2,3,4,rod) + the free branch's dyad
-    /// (thesis eq. 3.2-3.3).
+    /// 1 DOF, `θ1`. I6, I8: R(1) + triad RR-RR-RR(2,3,4,rod) + the free branch's dyad
+    /// (thesis eq. 3.2-3.3). A68: R(1) + the six-link group ASSUR(2,3,4,5,6,7) (the
+    /// joined levers are body 6), which carries the crank through A68's crank reversals
+    /// where the lever coordinate cannot.
     Crank,
     /// 1 DOF (I6, I8), `θ4`: R(4) + RRR(3,rod) + RRR(1,2) + the free branch's dyad.
     Swing,

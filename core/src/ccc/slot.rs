@@ -6,12 +6,14 @@ use super::build::{build, physical_link, BodyMap, BRANCHES, CRANK};
 use super::mode::{Clutch, Coordinates, Mode};
 use super::params::CccParams;
 use crate::dynamics::solve_accelerations;
-use crate::error::StepError;
+use crate::error::{GroupId, StepError};
 use crate::integrator::OdeSystem;
 use crate::kinematics::assemble;
+use crate::kinematics::group_id;
 use crate::model::Model;
 use crate::motor::Motor;
 use crate::scalar::{cross, perp, rotate_cs, Real, Vec2};
+use crate::structomat::GroupKind;
 use crate::structomat::JointKind;
 use crate::transmission::evaluate;
 use crate::workspace::Workspace;
@@ -282,6 +284,14 @@ impl<T: Real> Slot<T> {
                 } else if pi == 0 {
                     pi = locked_lever(pj);
                 }
+                // In A68 lever 8 is part of lever 6's body: rod 7 pins to lever 8.
+                let (r7, l8) = BRANCHES[1];
+                let (_, l6) = BRANCHES[0];
+                if (pi, pj) == (l6 as u8, r7 as u8) {
+                    pi = l8 as u8;
+                } else if (pi, pj) == (r7 as u8, l6 as u8) {
+                    pj = l8 as u8;
+                }
                 for (k, (a, b)) in JOINTS.iter().enumerate() {
                     if (pi, pj) == (*a, *b) {
                         out[k] = re.force;
@@ -308,11 +318,34 @@ impl<T: Real> Slot<T> {
     /// Smallest normalized determinant over the sequence's groups at the last
     /// evaluation (1 for a well-conditioned sequence, 0 at a dead point).
     pub fn conditioning(&self) -> T {
-        self.ws
+        self.worst_group().1
+    }
+
+    /// The worst-conditioned group of the sequence (physical link numbers) and its
+    /// normalized determinant at the last evaluation.
+    pub fn worst_group(&self) -> (GroupId, T) {
+        let mut worst = (0, T::one());
+        for (k, g) in self
+            .ws
             .group
             .iter()
             .take(self.model.groups().len())
-            .fold(T::one(), |m, g| m.min(g.conditioning))
+            .enumerate()
+        {
+            if g.conditioning < worst.1 {
+                worst = (k, g.conditioning);
+            }
+        }
+        let id = self.model.groups().get(worst.0).map_or(
+            GroupId {
+                index: 0,
+                kind: GroupKind::MotorR,
+                links: [0; crate::config::MAX_GROUP_LINKS],
+                count: 0,
+            },
+            |g| physical_group(&self.map, group_id(g, worst.0)),
+        );
+        (id, worst.1)
     }
 }
 
@@ -409,20 +442,23 @@ fn retime(e: StepError, time: f64) -> StepError {
 /// `e` with its group named in physical link numbers (SPEC 3's), ascending.
 pub(crate) fn physical<T: Real>(map: &BodyMap<T>, e: StepError) -> StepError {
     match e {
-        StepError::Group {
+        StepError::Group { time, group, fault } => StepError::Group {
             time,
-            mut group,
+            group: physical_group(map, group),
             fault,
-        } => {
-            let n = (group.count as usize).min(group.links.len());
-            for l in group.links.iter_mut().take(n) {
-                *l = map.phys.get(*l as usize).copied().unwrap_or(*l);
-            }
-            if let Some(s) = group.links.get_mut(..n) {
-                s.sort_unstable();
-            }
-            StepError::Group { time, group, fault }
-        }
+        },
         e => e,
     }
+}
+
+/// `group` named in physical link numbers, ascending.
+fn physical_group<T: Real>(map: &BodyMap<T>, mut group: GroupId) -> GroupId {
+    let n = (group.count as usize).min(group.links.len());
+    for l in group.links.iter_mut().take(n) {
+        *l = map.phys.get(*l as usize).copied().unwrap_or(*l);
+    }
+    if let Some(s) = group.links.get_mut(..n) {
+        s.sort_unstable();
+    }
+    group
 }

@@ -32,6 +32,9 @@ pub const MAX_LOCATE_ITER: usize = 16;
 pub const MAX_RETRIES: usize = 2;
 /// An event is located to this fraction of the step (1e-12 s at h = 1e-4 s).
 const THETA_TOL: f64 = 1e-8;
+/// Sub-steps tried in turn when a step breaks the energy balance (see
+/// [`TwinSettings::energy_tol`]): at most 1 + 4 + 16 DP5 steps' work.
+pub const SUBSTEPS: [u32; 3] = [1, 4, 16];
 
 /// Settings fixed at start.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -52,6 +55,13 @@ pub struct TwinSettings<T> {
     /// (a dead point of the coordinates is coming); one is taken if it is at least 1.5
     /// times better.
     pub switch_below: T,
+    /// Largest change of the audit residual over one step, relative to 1 J plus the
+    /// motor work and the kinetic and potential energies. A step past it is redone in
+    /// [`SUBSTEPS`]; if even the finest fails, the step fails with
+    /// [`TwinError::Diverged`] and the twin keeps its last good state. S2's steps stay
+    /// under 4e-11; S1's last steps before the diode stretches grow past 1e-9 each.
+    /// Reference: 1e-9, or 1000 ulps of the scalar if that is larger (f32).
+    pub energy_tol: T,
 }
 
 impl<T: Real> TwinSettings<T> {
@@ -65,6 +75,8 @@ impl<T: Real> TwinSettings<T> {
             crank_speed: T::zero(),
             swing_speed: T::zero(),
             switch_below: T::c(0.2),
+            // f32 rounds the energies to ~1e-7 of their size: 1e3 ulps then.
+            energy_tol: T::c(1e-9).max(T::EPS * T::c(1e3)),
         }
     }
 }
@@ -171,7 +183,7 @@ pub enum TwinError {
     Step(StepError),
     /// Every coordinate choice of the mode fails here: a singularity of the mechanism
     /// itself (SPEC 3: its constraints lose rank), or a dead point of every choice the
-    /// mode has (A68 has only its lever, which cannot pass the crank's dead points).
+    /// mode has.
     Mechanism {
         /// Time, s.
         time: f64,
@@ -179,6 +191,20 @@ pub enum TwinError {
         mode: Mode,
         /// The group that fails in each choice.
         failures: heapless::Vec<Failure, 3>,
+    },
+    /// One step breaks the energy balance past [`TwinSettings::energy_tol`] even in the
+    /// finest [`SUBSTEPS`]: the motion runs into a singularity of the mechanism faster
+    /// than the step can follow (the worst group's conditioning is then near 0), or
+    /// the step is far too coarse for the motion. Names the worst-conditioned group.
+    Diverged {
+        /// Time at the start of the step, s.
+        time: f64,
+        /// The mode.
+        mode: Mode,
+        /// Change of the audit residual over the step, J.
+        jump: f64,
+        /// The worst-conditioned group of the sequence (fault: its conditioning).
+        worst: Failure,
     },
     /// A turning shaft with J_s > 0 would leave both levers and coast: not modelled.
     Coasting {
@@ -208,6 +234,24 @@ impl fmt::Display for TwinError {
                 }
                 Ok(())
             }
+            TwinError::Diverged {
+                time,
+                mode,
+                jump,
+                worst,
+            } => write!(
+                f,
+                "t = {time:.6} s: mode {mode}: one step breaks the energy balance by {jump:.3e} J even in {} sub-steps: {} (worst group in {} coordinates: {} {})",
+                SUBSTEPS[SUBSTEPS.len() - 1],
+                if self.at_singularity() {
+                    "a singularity of the mechanism is near"
+                } else {
+                    "the step is too coarse for the motion"
+                },
+                worst.coords,
+                worst.group,
+                worst.fault
+            ),
             TwinError::Coasting { time } => write!(
                 f,
                 "t = {time:.6} s: the shaft would coast free of both levers (J_s > 0), which is not modelled"
@@ -217,6 +261,25 @@ impl fmt::Display for TwinError {
 }
 
 impl core::error::Error for TwinError {}
+
+/// Below this conditioning of its worst group, a [`TwinError::Diverged`] step is taken
+/// to run into a singularity of the mechanism rather than to be too coarse.
+pub const SINGULAR_CONDITIONING: f64 = 1e-2;
+
+impl TwinError {
+    /// Whether the twin stopped at a singularity of the mechanism itself (SPEC 3: the
+    /// end of S1), rather than at a bad input, a setting or a step too coarse.
+    pub fn at_singularity(&self) -> bool {
+        match self {
+            TwinError::Mechanism { .. } => true,
+            TwinError::Diverged { worst, .. } => matches!(
+                worst.fault,
+                GroupFault::Singular { conditioning } if conditioning < SINGULAR_CONDITIONING
+            ),
+            _ => false,
+        }
+    }
+}
 
 impl From<ModelError> for TwinError {
     fn from(e: ModelError) -> Self {
@@ -379,41 +442,97 @@ impl<T: Real> Twin<T> {
     /// state of the last good step.
     pub fn step(&mut self, inputs: &Inputs<T>) -> Result<(), TwinError> {
         check_inputs(inputs)?;
-        self.events.clear();
-        self.switches.clear();
         let changed = !same_inputs(&self.inputs, inputs);
-        if changed {
-            self.dp5.invalidate();
+        let saved = self.group_unknowns();
+        let mut failure = TwinError::Setting("no sub-step division was tried");
+        for (attempt, substeps) in SUBSTEPS.iter().enumerate() {
+            self.events.clear();
+            self.switches.clear();
+            if changed || attempt > 0 {
+                self.dp5.invalidate();
+            }
+            let mut w = Work {
+                t: self.t,
+                y: self.y,
+                impact: T::zero(),
+                switched: false,
+            };
+            let result = self
+                .advance(&mut w, inputs, changed, *substeps)
+                .and_then(|()| self.check_energy(&w));
+            match result {
+                Ok(()) => {
+                    self.y = w.y;
+                    self.steps += 1;
+                    self.commit(&w, inputs)?;
+                    self.inputs = *inputs;
+                    return Ok(());
+                }
+                Err(e) => {
+                    self.restore(w.switched, &saved);
+                    // A group that fails, or an energy balance that breaks, may be a
+                    // step too coarse for a fast passage: finer sub-steps may pass it.
+                    let retry =
+                        matches!(e, TwinError::Mechanism { .. } | TwinError::Diverged { .. });
+                    failure = e;
+                    if !retry {
+                        break;
+                    }
+                }
+            }
         }
-        let mut w = Work {
-            t: self.t,
-            y: self.y,
-            impact: T::zero(),
-            switched: false,
-        };
-        let result = self.advance(&mut w, inputs, changed);
-        match result {
-            Ok(()) => {
-                self.y = w.y;
-                self.steps += 1;
-                self.commit(&w, inputs)?;
-                self.inputs = *inputs;
-                Ok(())
-            }
-            Err(e) => {
-                self.restore(w.switched);
-                Err(e)
-            }
+        Err(failure)
+    }
+
+    /// The audit at the end of a step in `w` (the slot holds its evaluation).
+    fn audit_of(&self, links: &[LinkState<T>; 9], w: &Work<T>) -> Audit<T> {
+        let shaft = shaft_speed(self.slot.mode, links);
+        let (kinetic, potential) = physical_energy(&self.params, links, shaft);
+        Audit {
+            motor_work: w.y[W_MOTOR],
+            load_work: w.y[W_LOAD],
+            impact_loss: self.audit.impact_loss + w.impact,
+            kinetic,
+            potential,
+            initial: self.audit.initial,
         }
     }
 
+    /// Refuses a step whose audit residual moves past the tolerance.
+    fn check_energy(&self, w: &Work<T>) -> Result<(), TwinError> {
+        let links = self.slot.links(&self.params);
+        let a = self.audit_of(&links, w);
+        let jump = a.residual() - self.audit.residual();
+        let scale = T::one() + a.motor_work.abs() + a.kinetic.abs() + a.potential.abs();
+        if jump.abs() <= self.settings.energy_tol * scale {
+            return Ok(());
+        }
+        let (group, conditioning) = self.slot.worst_group();
+        Err(TwinError::Diverged {
+            time: self.t.to_f64(),
+            mode: self.slot.mode,
+            jump: jump.to_f64(),
+            worst: Failure {
+                coords: self.slot.coords,
+                group,
+                fault: GroupFault::Singular {
+                    conditioning: conditioning.to_f64(),
+                },
+            },
+        })
+    }
+
+    /// Integrates from `w` to the end of the step in at most `substeps` DP5 steps
+    /// between events, handling the events and coordinate switches on the way.
     fn advance(
         &mut self,
         w: &mut Work<T>,
         inputs: &Inputs<T>,
         changed: bool,
+        substeps: u32,
     ) -> Result<(), TwinError> {
         let t_end = T::c((self.steps + 1) as f64) * self.settings.h;
+        let h_max = self.settings.h / T::c(substeps as f64);
         if changed {
             // Inputs changed: re-evaluate here and see whether the mode still holds.
             self.finish(w, inputs)?;
@@ -434,7 +553,12 @@ impl<T: Real> Twin<T> {
             let t0 = w.t;
             let y0 = w.y;
             let saved = self.group_unknowns();
-            let h = t_end - t0;
+            // The last sub-step takes what is left (no sliver of a step from rounding).
+            let h = if t_end - t0 > h_max * T::c(1.5) {
+                h_max
+            } else {
+                t_end - t0
+            };
             let mut sys = Equations {
                 slot: &mut self.slot,
                 inputs,
@@ -460,7 +584,7 @@ impl<T: Real> Twin<T> {
             self.finish_evaluated(w, inputs)?;
             let fired = fired(&g0, &self.guards);
             if fired == 0 || events >= MAX_EVENTS_PER_STEP || !self.settings.clutch {
-                break;
+                continue;
             }
             events += 1;
             let (theta, kind) = self.locate(w, t0, h, &g0, fired, inputs)?;
@@ -491,10 +615,17 @@ impl<T: Real> Twin<T> {
         }
     }
 
-    fn restore(&mut self, switched: bool) {
+    /// Back to the state before the step: the pre-step slot (kept by
+    /// [`Twin::backup_once`] if the step changed it) with its group unknowns `saved`.
+    fn restore(
+        &mut self,
+        switched: bool,
+        saved: &[[T; crate::config::MAX_GROUP_VARS]; crate::config::MAX_GROUPS],
+    ) {
         if switched {
             core::mem::swap(&mut self.slot, &mut self.backup);
         }
+        self.set_group_unknowns(saved);
         self.dp5.invalidate();
         let mut w = Work {
             t: self.t,
@@ -509,7 +640,13 @@ impl<T: Real> Twin<T> {
     }
 
     fn group_unknowns(&self) -> [[T; crate::config::MAX_GROUP_VARS]; crate::config::MAX_GROUPS] {
-        core::array::from_fn(|k| self.slot.ws.group.get(k).map_or([T::zero(); 4], |g| g.x))
+        core::array::from_fn(|k| {
+            self.slot
+                .ws
+                .group
+                .get(k)
+                .map_or([T::zero(); crate::config::MAX_GROUP_VARS], |g| g.x)
+        })
     }
 
     fn set_group_unknowns(
@@ -1034,7 +1171,6 @@ impl<T: Real> Twin<T> {
         for (l, a) in links.iter_mut().zip(angles.iter()).skip(1) {
             l.theta = *a;
         }
-        let shaft = shaft_speed(self.slot.mode, &links);
         if self.slot.mode.shaft_turning() {
             let lever = if self.slot.mode.clutches()[0] == Clutch::Engaged {
                 6
@@ -1045,12 +1181,7 @@ impl<T: Real> Twin<T> {
         }
         self.links = links;
         self.joints = self.slot.joint_reactions(&self.params, &links);
-        let (k, u) = physical_energy(&self.params, &links, shaft);
-        self.audit.kinetic = k;
-        self.audit.potential = u;
-        self.audit.motor_work = w.y[W_MOTOR];
-        self.audit.load_work = w.y[W_LOAD];
-        self.audit.impact_loss += w.impact;
+        self.audit = self.audit_of(&links, w);
         Ok(())
     }
 

@@ -15,7 +15,17 @@ use crate::error::GroupFault;
 use crate::model::Model;
 use crate::scalar::{perp, rotate_cs, Real, Vec2};
 use crate::workspace::BodyState;
-use nalgebra::{Matrix4, SMatrix, Vector4};
+use nalgebra::{SMatrix, SVector};
+
+/// A group's Jacobian `W` (top-left `n × n`, identity padding) and its inverse.
+pub type GroupMatrix<T> = SMatrix<T, MAX_GROUP_VARS, MAX_GROUP_VARS>;
+/// The group's stacked loop-closure residuals (2 rows per closing chain).
+pub type GroupVector<T> = SVector<T, MAX_GROUP_VARS>;
+
+const _: () = assert!(
+    2 * MAX_CHAINS <= MAX_GROUP_VARS,
+    "every closing chain has 2 rows"
+);
 
 /// A term evaluated at the current configuration.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -43,7 +53,7 @@ pub struct GroupData<T: Real> {
     /// Sign of det W at assembly (the branch of a Newton group).
     pub det_sign: T,
     /// `W⁻¹` (top-left `n × n` block).
-    pub w_inv: Matrix4<T>,
+    pub w_inv: GroupMatrix<T>,
     /// |det W| / product of column norms at the last position solve: the sine of the
     /// transmission angle for a dyad; 0 at a dead point.
     pub conditioning: T,
@@ -67,7 +77,7 @@ impl<T: Real> Default for GroupData<T> {
             trig: [Vec2::new(T::one(), T::zero()); MAX_GROUP_VARS],
             branch: T::one(),
             det_sign: T::zero(),
-            w_inv: Matrix4::identity(),
+            w_inv: GroupMatrix::identity(),
             conditioning: T::one(),
             iterations: 0,
             cache: [[TermCache::default(); MAX_TERMS]; MAX_CHAINS],
@@ -289,8 +299,8 @@ pub(crate) fn residual<T: Real>(
     gd: &GroupData<T>,
     model: &Model<T>,
     bodies: &[BodyState<T>],
-) -> Vector4<T> {
-    let mut f = Vector4::zeros();
+) -> GroupVector<T> {
+    let mut f = GroupVector::zeros();
     for (ci, (ch, row)) in g.chains.iter().zip(gd.cache.iter()).enumerate() {
         let Some(end) = ch.end else { continue };
         let mut r = point_pos(model, bodies, ch.start) - point_pos(model, bodies, end);
@@ -303,7 +313,7 @@ pub(crate) fn residual<T: Real>(
 }
 
 #[inline]
-fn set2<T: Real>(f: &mut Vector4<T>, ci: usize, r: Vec2<T>) {
+fn set2<T: Real>(f: &mut GroupVector<T>, ci: usize, r: Vec2<T>) {
     if let Some(e) = f.get_mut(2 * ci) {
         *e = r.x;
     }
@@ -313,7 +323,7 @@ fn set2<T: Real>(f: &mut Vector4<T>, ci: usize, r: Vec2<T>) {
 }
 
 #[inline]
-fn add_col<T: Real>(w: &mut Matrix4<T>, ci: usize, k: u8, v: Vec2<T>) {
+fn add_col<T: Real>(w: &mut GroupMatrix<T>, ci: usize, k: u8, v: Vec2<T>) {
     if let Some(e) = w.get_mut((2 * ci, k as usize)) {
         *e += v.x;
     }
@@ -323,9 +333,9 @@ fn add_col<T: Real>(w: &mut Matrix4<T>, ci: usize, k: u8, v: Vec2<T>) {
 }
 
 /// The Jacobian `W = ∂f/∂x` from the cached terms (top-left `n × n`, identity padding).
-pub(crate) fn jacobian<T: Real>(g: &Group<T>, gd: &GroupData<T>) -> Matrix4<T> {
+pub(crate) fn jacobian<T: Real>(g: &Group<T>, gd: &GroupData<T>) -> GroupMatrix<T> {
     let n = g.n_vars as usize;
-    let mut w = Matrix4::zeros();
+    let mut w = GroupMatrix::zeros();
     for k in n..MAX_GROUP_VARS {
         if let Some(e) = w.get_mut((k, k)) {
             *e = T::one();
@@ -368,15 +378,24 @@ pub(crate) fn factor<T: Real>(
         return Ok(T::one());
     }
     let w = jacobian(g, gd);
-    let det = if n == 2 {
-        w[(0, 0)] * w[(1, 1)] - w[(0, 1)] * w[(1, 0)]
-    } else {
-        w.determinant()
-    };
     let mut norms = T::one();
     for k in 0..n {
         norms *= w.column(k).norm();
     }
+    // A dyad's 2×2 inverse in closed form; larger groups by Gauss-Jordan.
+    let (inv, det) = if n == 2 {
+        let (a, b, c, d) = (w[(0, 0)], w[(0, 1)], w[(1, 0)], w[(1, 1)]);
+        let det = a * d - b * c;
+        let id = T::one() / det;
+        let mut m = GroupMatrix::identity();
+        m[(0, 0)] = d * id;
+        m[(0, 1)] = -b * id;
+        m[(1, 0)] = -c * id;
+        m[(1, 1)] = a * id;
+        (m, det)
+    } else {
+        crate::linalg::invert(w, n).unwrap_or((GroupMatrix::identity(), T::zero()))
+    };
     let cond = if norms > T::zero() {
         det.abs() / norms
     } else {
@@ -388,19 +407,6 @@ pub(crate) fn factor<T: Real>(
             conditioning: cond.to_f64(),
         });
     }
-    let inv = if n == 2 {
-        let (a, b, c, d) = (w[(0, 0)], w[(0, 1)], w[(1, 0)], w[(1, 1)]);
-        let id = T::one() / det;
-        let mut m = Matrix4::identity();
-        m[(0, 0)] = d * id;
-        m[(0, 1)] = -b * id;
-        m[(1, 0)] = -c * id;
-        m[(1, 1)] = a * id;
-        m
-    } else {
-        w.try_inverse()
-            .ok_or(GroupFault::Singular { conditioning: 0.0 })?
-    };
     gd.w_inv = inv;
     Ok(det)
 }
@@ -504,7 +510,7 @@ fn linear_pass<T: Real>(
     let n = g.n_vars as usize;
     let mut u = zero;
     if n > 0 {
-        let mut rhs = Vector4::zeros();
+        let mut rhs = GroupVector::zeros();
         for (ci, (ch, row)) in g.chains.iter().zip(gd.cache.iter()).enumerate() {
             let Some(end) = ch.end else { continue };
             let mut r = pass.point(model, bodies, ch.start) - pass.point(model, bodies, end);
@@ -513,14 +519,13 @@ fn linear_pass<T: Real>(
             }
             set2(&mut rhs, ci, -r);
         }
-        if n == 2 {
-            // A dyad: only the 2×2 block of W⁻¹ is live.
-            let w = &gd.w_inv;
-            u[0] = w[(0, 0)] * rhs[0] + w[(0, 1)] * rhs[1];
-            u[1] = w[(1, 0)] * rhs[0] + w[(1, 1)] * rhs[1];
-        } else {
-            let sol = gd.w_inv * rhs;
-            u = [sol[0], sol[1], sol[2], sol[3]];
+        // Only the top-left n × n block of W⁻¹ is live.
+        for (r, ur) in u.iter_mut().enumerate().take(n) {
+            let mut acc = T::zero();
+            for (c, rc) in rhs.iter().enumerate().take(n) {
+                acc += gd.w_inv.get((r, c)).copied().unwrap_or(T::zero()) * *rc;
+            }
+            *ur = acc;
         }
     }
     match pass {

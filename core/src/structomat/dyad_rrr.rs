@@ -5,8 +5,8 @@
 //! circle(A, la) and circle(B, lb); branch +1 puts C to the left of A→B.
 
 use super::{
-    chain, list, point_pos, Angle, Base, Group, GroupData, GroupKind, Joint, JointKind, Placement,
-    PointRef, Term,
+    chain, guesses, list, point_pos, Angle, Base, Group, GroupData, GroupKind, Joint, JointKind,
+    Placement, PointRef, Term,
 };
 use crate::error::{GroupFault, ModelError};
 use crate::model::Model;
@@ -112,7 +112,7 @@ impl<T: Real> DyadRrr<T> {
                 ],
                 "joints",
             )?,
-            guess: [self.guess[0], self.guess[1], T::zero(), T::zero()],
+            guess: guesses(&self.guess),
             consts: [
                 la,
                 lb,

@@ -9,8 +9,8 @@
 
 use super::chain::angle_cs;
 use super::{
-    chain, list, point_pos, Angle, Base, Group, GroupData, GroupKind, Joint, JointKind, Length,
-    Placement, PointRef, Term,
+    chain, guesses, list, point_pos, Angle, Base, Group, GroupData, GroupKind, Joint, JointKind,
+    Length, Placement, PointRef, Term,
 };
 use crate::error::{GroupFault, ModelError};
 use crate::model::Model;
@@ -135,7 +135,7 @@ impl<T: Real> DyadRrt<T> {
                 ],
                 "joints",
             )?,
-            guess: [self.guess[0], self.guess[1], T::zero(), T::zero()],
+            guess: guesses(&self.guess),
             consts: [
                 lr,
                 vr.x / lr,

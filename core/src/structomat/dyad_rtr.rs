@@ -8,8 +8,8 @@
 //! `θb = ∠(A - B) - ∠(c + s d)`; branch +1 takes the larger `s`.
 
 use super::{
-    chain, list, point_pos, Angle, Base, Group, GroupData, GroupKind, Joint, JointKind, Length,
-    Placement, PointRef, Term,
+    chain, guesses, list, point_pos, Angle, Base, Group, GroupData, GroupKind, Joint, JointKind,
+    Length, Placement, PointRef, Term,
 };
 use crate::error::{GroupFault, ModelError};
 use crate::model::Model;
@@ -120,7 +120,7 @@ impl<T: Real> DyadRtr<T> {
                 ],
                 "joints",
             )?,
-            guess: [self.guess[0], self.guess[1], T::zero(), T::zero()],
+            guess: guesses(&self.guess),
             consts: [
                 c.x,
                 c.y,

@@ -6,7 +6,8 @@
 //! `x = (sb, sab)`. Linear in `x`: the closed form is one solve (no branch).
 
 use super::{
-    chain, list, Angle, Base, Group, GroupKind, Joint, JointKind, Length, Placement, PointRef, Term,
+    chain, guesses, list, Angle, Base, Group, GroupKind, Joint, JointKind, Length, Placement,
+    PointRef, Term,
 };
 use crate::error::ModelError;
 use crate::model::Model;
@@ -127,7 +128,7 @@ impl<T: Real> DyadRtt<T> {
                 ],
                 "joints",
             )?,
-            guess: [T::zero(); 4],
+            guess: guesses(&[]),
             consts: [T::zero(); 8],
             coord: None,
         })

@@ -5,7 +5,8 @@
 //! linear in `x`: the closed form is one solve with `W = [ua, -ub]` (no branch).
 
 use super::{
-    chain, list, Angle, Base, Group, GroupKind, Joint, JointKind, Length, Placement, PointRef, Term,
+    chain, guesses, list, Angle, Base, Group, GroupKind, Joint, JointKind, Length, Placement,
+    PointRef, Term,
 };
 use crate::error::ModelError;
 use crate::model::Model;
@@ -128,7 +129,7 @@ impl<T: Real> DyadTrt<T> {
                 ],
                 "joints",
             )?,
-            guess: [T::zero(); 4],
+            guess: guesses(&[]),
             consts: [T::zero(); 8],
             coord: None,
         })

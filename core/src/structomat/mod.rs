@@ -5,7 +5,7 @@
 //! kinematics of all of them:
 //!
 //! - its **unknowns** `x` (link angles, rad, and slider offsets, m): none for a motor
-//!   element, 2 for a dyad, 4 for the triad;
+//!   element, 2 for a dyad, 4 for the triad, up to 6 for a general Assur group;
 //! - its **vector chains**: a chain starts at a known point and adds rotating arms
 //!   `R(θ)·v` and slides `s·R(θ)·d`; a *closing* chain ends at another known point and
 //!   gives two loop-closure equations `f(x) = start + Σ terms - end = 0` (SPEC 1: "solve
@@ -17,10 +17,11 @@
 //!   equilibrium (thesis 3.3).
 //!
 //! Position: each dyad has a closed form (in its own file, with an assembly branch);
-//! the triad uses Newton-Raphson with a bounded iteration count, warm-started from the
+//! the triad and the general Assur group ([`assur`], up to 6 links) use Newton-Raphson with a bounded iteration count, warm-started from the
 //! last configuration ([`newton`]). Velocity and acceleration are linear in the same
 //! Jacobian `W = ∂f/∂x`: `W ẋ = -(known part of ḟ)`, `W ẍ = -(f̈ with ẍ = 0)`.
 
+pub mod assur;
 mod chain;
 pub mod dyad_rrr;
 pub mod dyad_rrt;
@@ -33,7 +34,8 @@ pub mod newton;
 pub mod pole;
 pub mod triad;
 
-pub use chain::{GroupData, TermCache};
+pub use assur::{AssurGroup, AssurJoint, AssurLoop, AssurStep};
+pub use chain::{GroupData, GroupMatrix, GroupVector, TermCache};
 pub use dyad_rrr::DyadRrr;
 pub use dyad_rrt::DyadRrt;
 pub use dyad_rtr::DyadRtr;
@@ -69,6 +71,9 @@ pub enum GroupKind {
     Rtt,
     /// Triad RR-RR-RR: three binary links and one ternary link.
     Triad,
+    /// A general Assur group of revolute joints laid out as vector loops
+    /// ([`AssurGroup`]), e.g. the converter's crank-driven A68 group.
+    Assur,
 }
 
 impl GroupKind {
@@ -83,6 +88,7 @@ impl GroupKind {
             GroupKind::Trt => "TRT",
             GroupKind::Rtt => "RTT",
             GroupKind::Triad => "RR-RR-RR",
+            GroupKind::Assur => "ASSUR",
         }
     }
 }
@@ -244,7 +250,7 @@ impl<T: Real> JointKind<T> {
 pub struct Group<T: Real> {
     /// The kind.
     pub kind: GroupKind,
-    /// Number of unknowns (0, 2 or 4).
+    /// Number of unknowns (0, 2, 4, or up to 6 for a general Assur group).
     pub n_vars: u8,
     /// The chains, closing ones first (`n_vars / 2` of them).
     pub chains: heapless::Vec<Chain<T>, MAX_CHAINS>,
@@ -271,7 +277,7 @@ impl<T: Real> Group<T> {
     /// Whether the position problem has a closed form (dyads, motor elements) or needs
     /// Newton-Raphson (the triad).
     pub fn has_closed_form(&self) -> bool {
-        !matches!(self.kind, GroupKind::Triad)
+        !matches!(self.kind, GroupKind::Triad | GroupKind::Assur)
     }
 }
 
@@ -291,6 +297,15 @@ pub(crate) fn chain<T: Real>(
         terms: v,
         end,
     })
+}
+
+/// Helper for the group constructors: a kind's guesses padded to the group capacity.
+pub(crate) fn guesses<T: Real>(g: &[T]) -> [T; MAX_GROUP_VARS] {
+    let mut out = [T::zero(); MAX_GROUP_VARS];
+    for (o, v) in out.iter_mut().zip(g.iter()) {
+        *o = *v;
+    }
+    out
 }
 
 /// Helper for the group constructors: a fixed-capacity list from a slice.

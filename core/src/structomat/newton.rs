@@ -57,7 +57,7 @@ pub(crate) fn solve<T: Real>(
             return position_from_x(g, gd, model, bodies, q);
         }
         let w = jacobian(g, gd);
-        let Some(inv) = w.try_inverse() else {
+        let Some((inv, _)) = crate::linalg::invert(w, n) else {
             return Err(GroupFault::Singular { conditioning: 0.0 });
         };
         let dx = inv * f;

@@ -8,7 +8,8 @@
 //! from the last configuration ([`newton`](super::newton)).
 
 use super::{
-    chain, list, Angle, Base, Group, GroupKind, Joint, JointKind, Placement, PointRef, Term,
+    chain, guesses, list, Angle, Base, Group, GroupKind, Joint, JointKind, Placement, PointRef,
+    Term,
 };
 use crate::error::ModelError;
 use crate::model::Model;
@@ -147,7 +148,7 @@ impl<T: Real> TriadRrRrRr<T> {
                 "placements",
             )?,
             joints: list(&joints, "joints")?,
-            guess: self.guess,
+            guess: guesses(&self.guess),
             consts: [T::zero(); 8],
             coord: None,
         })
