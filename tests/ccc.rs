@@ -457,3 +457,28 @@ fn bad_inputs_leave_the_state() {
     assert_eq!(a.qd(), b.qd());
     assert_eq!(a.mode(), b.mode());
 }
+
+/// With no load (T_r = 0) an engaged lever carries exactly 0 N·m: rounding must not fire
+/// releases that keep the mode (it did, every few steps, before the release threshold
+/// had its 1e-9 (T_r + 1 N·m) margin). The shaft turns in the drive direction at once.
+#[test]
+fn no_load_does_not_chatter() {
+    let inputs = Inputs {
+        load: 0.0,
+        ..s2_inputs()
+    };
+    let r = run(
+        CccParams::reference(),
+        TwinSettings::reference(1e-4),
+        inputs,
+        0.2,
+    );
+    assert!(r.end.is_none(), "{:?}", r.end);
+    let start = r.events.first().expect("the start event");
+    assert!(start.to.shaft_turning(), "{start:?}");
+    for e in &r.events[1..] {
+        assert_ne!(e.from, e.to, "an event that keeps the mode: {e:?}");
+    }
+    assert!(r.events.len() < 20, "{} events in 0.2 s", r.events.len());
+    assert!(r.max_rel_residual < 1e-6, "{:.3e}", r.max_rel_residual);
+}

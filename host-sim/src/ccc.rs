@@ -16,8 +16,8 @@ use std::io::{self, BufWriter, Write};
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 use structomat::ccc::{
-    Audit, CccParams, Coordinates, DriveDirection, EventKind, Inputs, Mode, MotorInput, Twin,
-    TwinError, TwinSettings, JOINT_NAMES,
+    initial_pose, mode_model, Audit, CccParams, Coordinates, DriveDirection, EventKind, Inputs,
+    Mode, MotorInput, Twin, TwinError, TwinSettings, JOINT_NAMES,
 };
 use structomat::motor::Motor;
 use structomat::Real;
@@ -40,6 +40,21 @@ pub struct CccScenario {
 }
 
 impl CccScenario {
+    /// The structomatic formula of the mode the twin starts from (I0, or free, in its
+    /// first coordinate choice), in physical link numbers; `?` if it cannot build.
+    pub fn start_formula(&self) -> String {
+        let params = CccParams::<f64>::reference();
+        let mode = if self.clutch { Mode::I0 } else { Mode::Free };
+        let coords = mode.coordinate_choices()[0];
+        let settings = TwinSettings::reference(self.h);
+        initial_pose(&params, settings.crank, settings.swing)
+            .and_then(|pose| mode_model(&params, mode, coords, &pose).ok())
+            .map_or_else(
+                || "?".to_string(),
+                |(model, _)| format!("{} ({mode}, {coords})", model.formula()),
+            )
+    }
+
     /// S1 (thesis 7.1): free mode, 12 N·m, from rest; `h` = 1e-4 s, `t_end` = 1 s (it
     /// ends at a singularity of the mechanism well before).
     pub fn s1() -> Self {

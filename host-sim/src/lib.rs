@@ -65,14 +65,21 @@ where
     }
 }
 
-/// Writes `host-sim list`: one line per mechanism scenario with its formula,
-/// description and integration settings. (The converter scenarios `ccc-s1` and `ccc-s2`
-/// are described in `host-sim help`.)
+/// Writes `host-sim list`: one line per scenario with its formula, description and
+/// integration settings. A converter scenario's formula is that of its first mode's
+/// first coordinate choice (the modes change it as they go: `host-sim help`).
 pub fn list(w: &mut dyn Write) -> io::Result<()> {
     let mut lines = Vec::new();
-    for s in ScenarioId::MECHANISMS {
+    for s in ScenarioId::ALL {
         match s.build::<f64>() {
-            None => continue,
+            None => {
+                let Some(c) = s.converter() else { continue };
+                lines.push((
+                    s.name(),
+                    c.start_formula(),
+                    format!("{}; h = {} s, t_end = {} s", s.description(), c.h, c.t_end),
+                ));
+            }
             Some(Ok(sc)) => lines.push((
                 s.name(),
                 sc.model.formula().to_string(),

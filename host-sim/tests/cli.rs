@@ -339,13 +339,23 @@ fn help_and_list() {
     let (code, out, err) = host_sim(&["list"]);
     assert_eq!(code, 0, "{err}");
     let lines: Vec<&str> = out.lines().collect();
-    assert_eq!(lines.len(), 2, "{out}");
+    assert_eq!(lines.len(), 4, "{out}");
     assert!(
         lines[0].starts_with("slider-crank") && lines[0].contains("Z(0) + R(1) + RRT(2,3)"),
         "{out}"
     );
     assert!(
         lines[1].starts_with("five-bar") && lines[1].contains("Z(0) + R(1) + R(2) + RRR(3,4)"),
+        "{out}"
+    );
+    // The converter starts from its 2-DOF sequence (thesis eq. 3.1), free or in I0.
+    let ccc = "Z(0) + R(1) + R(4) + RRR(2,3) + RRR(5,6) + RRR(7,8)";
+    assert!(
+        lines[2].starts_with("ccc-s1") && lines[2].contains(&format!("{ccc} (free, crank+swing)")),
+        "{out}"
+    );
+    assert!(
+        lines[3].starts_with("ccc-s2") && lines[3].contains(&format!("{ccc} (I0, crank+swing)")),
         "{out}"
     );
 }

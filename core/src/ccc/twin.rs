@@ -696,16 +696,20 @@ impl<T: Real> Twin<T> {
         let shaft = shaft_speed(mode, links);
         let mut locked = T::zero();
         let mut any_locked = false;
+        // A release fires when c_k falls below -1e-9 (T_r + 1 N·m), not below 0: with
+        // T_r = 0 an engaged lever carries exactly 0, and rounding (1e-15 N·m) must not
+        // fire a release every few steps. The event moves by 1e-9 N·m / ċ_k, nothing.
+        let c_tol = T::c(1e-9) * (inputs.load + T::one());
         for (k, ((_, lever), clutch)) in BRANCHES.iter().zip(mode.clutches()).enumerate() {
             let w = links.get(*lever).map_or(T::zero(), |s| s.omega);
             match clutch {
                 Clutch::Free => g[k] = Some(d * (w - shaft)),
                 Clutch::Locked => {
-                    g[2 + k] = Some(-c[k]);
+                    g[2 + k] = Some(-(c[k] + c_tol));
                     locked += c[k];
                     any_locked = true;
                 }
-                Clutch::Engaged => g[2 + k] = Some(-c[k]),
+                Clutch::Engaged => g[2 + k] = Some(-(c[k] + c_tol)),
             }
         }
         if any_locked {
