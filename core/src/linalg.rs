@@ -3,6 +3,21 @@
 use crate::scalar::Real;
 use nalgebra::{SMatrix, SVector};
 
+/// Partial pivoting: the row (from `k` up to `n`) of the largest entry of column `k`;
+/// `None` if that entry is zero or not finite.
+fn pivot<T: Real, const N: usize>(a: &SMatrix<T, N, N>, k: usize, n: usize) -> Option<usize> {
+    let mut p = k;
+    let mut best = T::zero();
+    for r in k..n {
+        let v = a.get((r, k))?.abs();
+        if v > best {
+            best = v;
+            p = r;
+        }
+    }
+    (best > T::zero() && best.finite()).then_some(p)
+}
+
 /// Solves `A x = b` by Gaussian elimination with partial pivoting (`N` ≤ 12 here: a
 /// group's equilibrium). `None` if a pivot vanishes or is not finite. Bounded work:
 /// `N³/3` multiply-adds, no iteration.
@@ -11,19 +26,7 @@ pub fn solve<T: Real, const N: usize>(
     mut b: SVector<T, N>,
 ) -> Option<SVector<T, N>> {
     for k in 0..N {
-        // Pivot: the largest entry of column k at or below the diagonal.
-        let mut p = k;
-        let mut best = T::zero();
-        for r in k..N {
-            let v = a.get((r, k))?.abs();
-            if v > best {
-                best = v;
-                p = r;
-            }
-        }
-        if !(best > T::zero()) || !best.finite() {
-            return None;
-        }
+        let p = pivot(&a, k, N)?;
         if p != k {
             a.swap_rows(k, p);
             b.swap_rows(k, p);
@@ -64,18 +67,7 @@ pub fn invert<T: Real, const N: usize>(
     let mut inv = SMatrix::<T, N, N>::identity();
     let mut det = T::one();
     for k in 0..n {
-        let mut p = k;
-        let mut best = T::zero();
-        for r in k..n {
-            let v = a.get((r, k))?.abs();
-            if v > best {
-                best = v;
-                p = r;
-            }
-        }
-        if !(best > T::zero()) || !best.finite() {
-            return None;
-        }
+        let p = pivot(&a, k, n)?;
         if p != k {
             a.swap_rows(k, p);
             inv.swap_rows(k, p);

@@ -451,12 +451,7 @@ impl<T: Real> Twin<T> {
             if changed || attempt > 0 {
                 self.dp5.invalidate();
             }
-            let mut w = Work {
-                t: self.t,
-                y: self.y,
-                impact: T::zero(),
-                switched: false,
-            };
+            let mut w = self.work_from_state();
             let result = self
                 .advance(&mut w, inputs, changed, *substeps)
                 .and_then(|()| self.check_energy(&w));
@@ -482,6 +477,16 @@ impl<T: Real> Twin<T> {
             }
         }
         Err(failure)
+    }
+
+    /// A step's working state, starting from the twin's last good state.
+    fn work_from_state(&self) -> Work<T> {
+        Work {
+            t: self.t,
+            y: self.y,
+            impact: T::zero(),
+            switched: false,
+        }
     }
 
     /// The audit at the end of a step in `w` (the slot holds its evaluation).
@@ -627,12 +632,7 @@ impl<T: Real> Twin<T> {
         }
         self.set_group_unknowns(saved);
         self.dp5.invalidate();
-        let mut w = Work {
-            t: self.t,
-            y: self.y,
-            impact: T::zero(),
-            switched: false,
-        };
+        let mut w = self.work_from_state();
         // It evaluated at this very state before: this cannot fail, and if it did the
         // workspace would merely hold the failed evaluation.
         let inputs = self.inputs;
