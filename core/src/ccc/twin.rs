@@ -432,7 +432,8 @@ impl<T: Real> Twin<T> {
             twin.choose(&mut w, EventKind::Start, &inputs)?;
         }
         twin.y = w.y;
-        twin.commit(&w, &inputs)?;
+        let audit = twin.audit_of(&twin.slot.links(&twin.params), &w);
+        twin.commit(&w, audit);
         let (k, u) = (twin.audit.kinetic, twin.audit.potential);
         twin.audit.initial = k + u;
         Ok(twin)
@@ -456,10 +457,10 @@ impl<T: Real> Twin<T> {
                 .advance(&mut w, inputs, changed, *substeps)
                 .and_then(|()| self.check_energy(&w));
             match result {
-                Ok(()) => {
+                Ok(audit) => {
                     self.y = w.y;
                     self.steps += 1;
-                    self.commit(&w, inputs)?;
+                    self.commit(&w, audit);
                     self.inputs = *inputs;
                     return Ok(());
                 }
@@ -503,14 +504,15 @@ impl<T: Real> Twin<T> {
         }
     }
 
-    /// Refuses a step whose audit residual moves past the tolerance.
-    fn check_energy(&self, w: &Work<T>) -> Result<(), TwinError> {
+    /// The audit at the end of the step in `w`, or an error if its residual moved past
+    /// the tolerance over the step.
+    fn check_energy(&self, w: &Work<T>) -> Result<Audit<T>, TwinError> {
         let links = self.slot.links(&self.params);
         let a = self.audit_of(&links, w);
         let jump = a.residual() - self.audit.residual();
         let scale = T::one() + a.motor_work.abs() + a.kinetic.abs() + a.potential.abs();
         if jump.abs() <= self.settings.energy_tol * scale {
-            return Ok(());
+            return Ok(a);
         }
         let (group, conditioning) = self.slot.worst_group();
         Err(TwinError::Diverged {
@@ -1096,28 +1098,16 @@ impl<T: Real> Twin<T> {
         let links = self.slot.links(&self.params);
         let now = self.slot.conditioning();
         let mut best: Option<(T, Coordinates)> = None;
-        let mut failures: heapless::Vec<Failure, 3> = heapless::Vec::new();
-        for coords in mode.coordinate_choices().iter().copied() {
-            if coords == self.slot.coords && failed.is_some() {
-                continue;
+        let skip = failed.map(|_| self.slot.coords);
+        // Only the winner's choice is kept (and built again below): holding a second
+        // slot here would double this frame's stack.
+        let mut failures = scan_choices(&self.params, mode, &pose, time, skip, |coords, s, _| {
+            let cond = s.conditioning();
+            if best.as_ref().is_none_or(|(b, _)| cond > *b) {
+                best = Some((cond, coords));
             }
-            match Slot::new(&self.params, mode, coords, &pose, time) {
-                Ok((s, _)) => {
-                    let cond = s.conditioning();
-                    if best.as_ref().is_none_or(|(b, _)| cond > *b) {
-                        best = Some((cond, coords));
-                    }
-                }
-                Err(StepError::Group { group, fault, .. }) => {
-                    let _ = failures.push(Failure {
-                        coords,
-                        group,
-                        fault,
-                    });
-                }
-                Err(e) => return Err(TwinError::Step(e)),
-            }
-        }
+            false
+        })?;
         let Some((cond, coords)) = best else {
             if let Some(StepError::Group { group, fault, .. }) =
                 failed.map(|e| physical(&self.slot.map, e))
@@ -1168,7 +1158,7 @@ impl<T: Real> Twin<T> {
 
     /// Makes the state after a successful step the twin's: physical links (angles
     /// unwrapped), shaft, clutch torques, reactions, the energy audit.
-    fn commit(&mut self, w: &Work<T>, _inputs: &Inputs<T>) -> Result<(), TwinError> {
+    fn commit(&mut self, w: &Work<T>, audit: Audit<T>) {
         self.t = w.t;
         let angles = self.slot_links_unwrapped();
         let mut links = self.slot.links(&self.params);
@@ -1185,8 +1175,7 @@ impl<T: Real> Twin<T> {
         }
         self.links = links;
         self.joints = self.slot.joint_reactions(&self.params, &links);
-        self.audit = self.audit_of(&links, w);
-        Ok(())
+        self.audit = audit;
     }
 
     fn physical_error(&self, e: StepError) -> TwinError {
@@ -1496,18 +1485,45 @@ fn best_slot<T: Real>(
     time: f64,
 ) -> Result<(Slot<T>, [T; 2]), TwinError> {
     let mut best: Option<(Slot<T>, [T; 2])> = None;
+    let failures = scan_choices(params, mode, pose, time, None, |_, s, q| {
+        let good = s.conditioning() >= T::c(0.2);
+        if good
+            || best
+                .as_ref()
+                .is_none_or(|(b, _)| s.conditioning() > b.conditioning())
+        {
+            best = Some((s, q));
+        }
+        good
+    })?;
+    best.ok_or(TwinError::Mechanism {
+        time,
+        mode,
+        failures,
+    })
+}
+
+/// Assembles `mode` at `pose` in each of its coordinate choices but `skip`, in order,
+/// and hands each that assembles to `take` with its coordinates (`take` returns `true`
+/// to stop there). Returns the groups that failed in the others; an error that is not
+/// a group's (a non-finite input) ends the scan.
+fn scan_choices<T: Real>(
+    params: &CccParams<T>,
+    mode: Mode,
+    pose: &[T; 9],
+    time: f64,
+    skip: Option<Coordinates>,
+    mut take: impl FnMut(Coordinates, Slot<T>, [T; 2]) -> bool,
+) -> Result<heapless::Vec<Failure, 3>, TwinError> {
     let mut failures: heapless::Vec<Failure, 3> = heapless::Vec::new();
     for coords in mode.coordinate_choices().iter().copied() {
+        if Some(coords) == skip {
+            continue;
+        }
         match Slot::new(params, mode, coords, pose, time) {
             Ok((s, q)) => {
-                if s.conditioning() >= T::c(0.2) {
-                    return Ok((s, q));
-                }
-                if best
-                    .as_ref()
-                    .is_none_or(|(b, _)| s.conditioning() > b.conditioning())
-                {
-                    best = Some((s, q));
+                if take(coords, s, q) {
+                    break;
                 }
             }
             Err(StepError::Group { group, fault, .. }) => {
@@ -1520,11 +1536,7 @@ fn best_slot<T: Real>(
             Err(e) => return Err(TwinError::Step(e)),
         }
     }
-    best.ok_or(TwinError::Mechanism {
-        time,
-        mode,
-        failures,
-    })
+    Ok(failures)
 }
 
 /// `a` plus the multiple of 2π that brings it nearest `reference`.
