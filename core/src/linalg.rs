@@ -3,6 +3,22 @@
 use crate::scalar::Real;
 use nalgebra::{SMatrix, SVector};
 
+/// Swaps rows `i` and `j` of `m`; `None` (and nothing swapped) if either is out of
+/// range. nalgebra's `swap_rows` asserts its indices; this bound makes that assertion
+/// provably dead, so no panic is reachable from the eliminations below.
+fn swap_rows<T: Real, const R: usize, const C: usize>(
+    m: &mut SMatrix<T, R, C>,
+    i: usize,
+    j: usize,
+) -> Option<()> {
+    if i < R && j < R {
+        m.swap_rows(i, j);
+        Some(())
+    } else {
+        None
+    }
+}
+
 /// Partial pivoting: the row (from `k` up to `n`) of the largest entry of column `k`;
 /// `None` if that entry is zero or not finite.
 fn pivot<T: Real, const N: usize>(a: &SMatrix<T, N, N>, k: usize, n: usize) -> Option<usize> {
@@ -28,8 +44,8 @@ pub fn solve<T: Real, const N: usize>(
     for k in 0..N {
         let p = pivot(&a, k, N)?;
         if p != k {
-            a.swap_rows(k, p);
-            b.swap_rows(k, p);
+            swap_rows(&mut a, k, p)?;
+            swap_rows(&mut b, k, p)?;
         }
         let piv = *a.get((k, k))?;
         for r in (k + 1)..N {
@@ -69,8 +85,8 @@ pub fn invert<T: Real, const N: usize>(
     for k in 0..n {
         let p = pivot(&a, k, n)?;
         if p != k {
-            a.swap_rows(k, p);
-            inv.swap_rows(k, p);
+            swap_rows(&mut a, k, p)?;
+            swap_rows(&mut inv, k, p)?;
             det = -det;
         }
         let piv = *a.get((k, k))?;

@@ -70,9 +70,12 @@ impl<T: Real> OdeSystem<T, STATE_DIM> for Equations<'_, T> {
             qd.get(..m).unwrap_or(qd),
         )?;
         dy.fill(T::zero());
-        for k in 0..m {
-            dy[k] = self.ws.qd[k];
-            dy[MAX_DOF + k] = self.ws.qdd[k];
+        let (dq, dqd) = dy.as_mut_slice().split_at_mut(MAX_DOF);
+        for (d, v) in dq.iter_mut().zip(&self.ws.qd).take(m) {
+            *d = *v;
+        }
+        for (d, a) in dqd.iter_mut().zip(&self.ws.qdd).take(m) {
+            *d = *a;
         }
         Ok(())
     }
@@ -154,7 +157,8 @@ impl<T: Real> Simulation<T> {
                 // warm start): the workspace describes the state again.
                 let m = self.model.dof();
                 let (q, qd) = self.y.as_slice().split_at(MAX_DOF);
-                let _ = forward(&self.model, &mut self.ws, self.t, &q[..m], &qd[..m]);
+                let (q, qd) = (q.get(..m).unwrap_or(q), qd.get(..m).unwrap_or(qd));
+                let _ = forward(&self.model, &mut self.ws, self.t, q, qd);
                 Err(e)
             }
         }
@@ -174,15 +178,18 @@ impl<T: Real> Simulation<T> {
     }
     /// Generalized coordinates.
     pub fn q(&self) -> &[T] {
-        &self.y.as_slice()[..self.model.dof()]
+        self.y.as_slice().get(..self.model.dof()).unwrap_or(&[])
     }
     /// Generalized speeds.
     pub fn qd(&self) -> &[T] {
-        &self.y.as_slice()[MAX_DOF..MAX_DOF + self.model.dof()]
+        self.y
+            .as_slice()
+            .get(MAX_DOF..MAX_DOF + self.model.dof())
+            .unwrap_or(&[])
     }
     /// Generalized accelerations at the current state.
     pub fn qdd(&self) -> &[T] {
-        &self.ws.qdd[..self.model.dof()]
+        self.ws.qdd.get(..self.model.dof()).unwrap_or(&[])
     }
     /// The model.
     pub fn model(&self) -> &Model<T> {

@@ -129,7 +129,9 @@ pub(crate) fn build<T: Real>(
         if clutches[k] == Clutch::Locked {
             let at = lever_point(p, *lever, th(*lever));
             pin[k] = Some(b.ground_point(at.x, at.y)?);
-            map.offset[*lever] = th(*lever);
+            if let Some(o) = map.offset.get_mut(*lever) {
+                *o = th(*lever);
+            }
         }
     }
     // Links, in physical order.
@@ -429,8 +431,8 @@ pub fn initial_pose<T: Real>(p: &CccParams<T>, crank: T, swing: T) -> Option<[T;
     pose[SWING] = swing;
     for ((rod, lever), side) in BRANCHES.iter().zip([p.branch_g, p.branch_i]) {
         let pin = circle_meet(d, p.link(*rod).length, p.h, p.link(*lever).length, side)?;
-        pose[*rod] = angle(pin - d);
-        pose[*lever] = angle(pin - p.h);
+        *pose.get_mut(*rod)? = angle(pin - d);
+        *pose.get_mut(*lever)? = angle(pin - p.h);
     }
     Some(pose)
 }

@@ -109,6 +109,19 @@ impl<T: Real> Slot<T> {
         self.map.body.get(p).copied().unwrap_or(0)
     }
 
+    /// The row of the transmission matrix `V` that gives physical link `p`'s angular
+    /// speed from the coordinates' rates: `ω_p = r[0] q̇₁ + r[1] q̇₂` (rows `3(b-1)+2` of
+    /// `V` are the bodies' rotations, SPEC 1). Zeros for a link the mode has no body for.
+    pub fn omega_row(&self, p: usize) -> [T; 2] {
+        let b = self.body(p) as usize;
+        let r = 3 * (b.max(1) - 1) + 2;
+        let v = &self.ws.v;
+        // V has three rows per body of the validated model, so `r` is in range; the
+        // checked reads keep the step path free of a reachable panic.
+        let at = |c: usize| v.get((r, c)).copied().unwrap_or_else(T::zero);
+        [at(0), at(1)]
+    }
+
     /// The body the shaft and the load act on (A modes), if any.
     pub fn shaft_body(&self) -> Option<u8> {
         let c = self.mode.clutches();

@@ -799,8 +799,8 @@ impl<T: Real> Twin<T> {
     fn slot_links_unwrapped(&self) -> [T; 9] {
         let links = self.slot.links(&self.params);
         let mut out = [T::zero(); 9];
-        for (p, o) in out.iter_mut().enumerate().skip(1) {
-            *o = unwrap_near(links[p].theta, self.links[p].theta);
+        for ((o, now), last) in out.iter_mut().zip(&links).zip(&self.links).skip(1) {
+            *o = unwrap_near(now.theta, last.theta);
         }
         out
     }
@@ -825,7 +825,7 @@ impl<T: Real> Twin<T> {
         // Which levers touch the shaft (may lock or engage), and the shaft's options.
         let mut contact = [false; 2];
         for (k, ((_, lever), clutch)) in BRANCHES.iter().zip(from.clutches()).enumerate() {
-            let rel = links[*lever].omega - shaft;
+            let rel = links.get(*lever).map_or_else(T::zero, |l| l.omega) - shaft;
             contact[k] = clutch != Clutch::Free
                 || (rel.abs() <= tol_w)
                 || kind == EventKind::Catch(*lever as u8);
@@ -862,10 +862,11 @@ impl<T: Real> Twin<T> {
         }
         // Insertion sort by preference (stable: ties keep the enumeration order).
         for i in 1..cands.len() {
-            let mut j = i;
-            while j > 0 && cands[j - 1].0 > cands[j].0 {
-                cands.swap(j - 1, j);
-                j -= 1;
+            for j in (1..=i).rev() {
+                match cands.get_mut(j - 1..=j) {
+                    Some([a, b]) if a.0 > b.0 => core::mem::swap(a, b),
+                    _ => break,
+                }
             }
         }
         // Generalized momentum space of the unconstrained diode: the 2-DOF model, plus the
@@ -875,7 +876,8 @@ impl<T: Real> Twin<T> {
         let mut yr = SVector::<T, STATE>::zeros();
         for k in 0..2 {
             yr[k] = qr[k];
-            yr[QD + k] = links[self.reference.map.coord_link[k] as usize].omega;
+            let p = self.reference.map.coord_link[k] as usize;
+            yr[QD + k] = links.get(p).map_or_else(T::zero, |l| l.omega);
         }
         self.reference
             .eval(w.t, &yr, inputs, d)
@@ -897,9 +899,8 @@ impl<T: Real> Twin<T> {
             if with_shaft { shaft } else { T::zero() },
         );
         let lever_row = |slot: &Slot<T>, lever: usize| -> SVector<T, 3> {
-            let b = slot.body(lever) as usize;
-            let r = 3 * (b.max(1) - 1) + 2;
-            SVector::<T, 3>::new(slot.ws.v[(r, 0)], slot.ws.v[(r, 1)], T::zero())
+            let [v0, v1] = slot.omega_row(lever);
+            SVector::<T, 3>::new(v0, v1, T::zero())
         };
         let mut best: Option<(T, Mode)> = None;
         let mut chosen = None;
@@ -1002,9 +1003,8 @@ impl<T: Real> Twin<T> {
         // Physical angular speeds after the impact, from the reference model's V.
         let mut omega = [T::zero(); 9];
         for (p, o) in omega.iter_mut().enumerate().skip(1) {
-            let b = self.reference.body(p) as usize;
-            let r = 3 * (b.max(1) - 1) + 2;
-            *o = self.reference.ws.v[(r, 0)] * u_plus[0] + self.reference.ws.v[(r, 1)] * u_plus[1];
+            let [v0, v1] = self.reference.omega_row(p);
+            *o = v0 * u_plus[0] + v1 * u_plus[1];
         }
         // The first coordinate choice that assembles here and represents these speeds
         // (a choice at its dead point maps them wrongly: the lever of A68 cannot carry
@@ -1059,9 +1059,10 @@ impl<T: Real> Twin<T> {
                 Clutch::Free => {
                     // A free lever touching the shaft must not pass it in the drive
                     // direction.
-                    let rel_w = links[*lever].omega - shaft_speed(m, &links);
+                    let l = links.get(*lever).copied().unwrap_or_default();
+                    let rel_w = l.omega - shaft_speed(m, &links);
                     if rel_w.abs() <= tol_w {
-                        let rel = d * (links[*lever].alpha - shaft_alpha);
+                        let rel = d * (l.alpha - shaft_alpha);
                         v += (rel - tol_a).max(T::zero()) / alpha_scale;
                     }
                 }
@@ -1428,6 +1429,10 @@ fn project<T: Real>(
 ) -> Option<(SVector<T, 3>, T)> {
     let minv = mass.try_inverse()?;
     let n = rows.len();
+    // At most the three coordinates' worth of independent constraints.
+    if n > 3 {
+        return None;
+    }
     if n == 0 {
         return Some((*u, T::zero()));
     }

@@ -379,8 +379,8 @@ pub(crate) fn factor<T: Real>(
     }
     let w = jacobian(g, gd);
     let mut norms = T::one();
-    for k in 0..n {
-        norms *= w.column(k).norm();
+    for col in w.column_iter().take(n) {
+        norms *= col.norm();
     }
     // A dyad's 2×2 inverse in closed form; larger groups by Gauss-Jordan.
     let (inv, det) = if n == 2 {
