@@ -17,6 +17,8 @@ use crate::structomat::{
     PointRef, Term, TriadRrRrRr,
 };
 use core::fmt;
+use core::marker::PhantomData;
+use core::ops::{Deref, DerefMut};
 
 /// A rigid link: mass properties and the points where joints sit, in its own frame.
 ///
@@ -118,7 +120,7 @@ pub struct Load<T: Real> {
 }
 
 /// A validated mechanism description. Built by [`ModelBuilder`]; read-only afterwards.
-#[derive(Clone, Debug)]
+#[derive(Debug)]
 pub struct Model<T: Real> {
     ground: heapless::Vec<Vec2<T>, MAX_GROUND_POINTS>,
     links: heapless::Vec<Link<T>, MAX_LINKS>,
@@ -129,6 +131,43 @@ pub struct Model<T: Real> {
     dof: u8,
     singular_tol: T,
     newton_tol: T,
+}
+
+impl<T: Real> Clone for Model<T> {
+    fn clone(&self) -> Self {
+        Model {
+            ground: self.ground.clone(),
+            links: self.links.clone(),
+            groups: self.groups.clone(),
+            drives: self.drives.clone(),
+            loads: self.loads.clone(),
+            gravity: self.gravity,
+            dof: self.dof,
+            singular_tol: self.singular_tol,
+            newton_tol: self.newton_tol,
+        }
+    }
+
+    /// Field by field, in place: no temporary model (16 KB in f64) on the stack.
+    fn clone_from(&mut self, source: &Self) {
+        copy_vec(&mut self.ground, &source.ground);
+        copy_vec(&mut self.links, &source.links);
+        copy_vec(&mut self.groups, &source.groups);
+        copy_vec(&mut self.drives, &source.drives);
+        copy_vec(&mut self.loads, &source.loads);
+        self.gravity = source.gravity;
+        self.dof = source.dof;
+        self.singular_tol = source.singular_tol;
+        self.newton_tol = source.newton_tol;
+    }
+}
+
+/// `dst` becomes a copy of `src`, element by element (the same capacity: every push fits).
+fn copy_vec<E: Clone, const N: usize>(dst: &mut heapless::Vec<E, N>, src: &heapless::Vec<E, N>) {
+    dst.clear();
+    for e in src.iter() {
+        let _ = dst.push(e.clone());
+    }
 }
 
 impl<T: Real> Model<T> {
@@ -265,10 +304,30 @@ group_spec!(
     TriadRrRrRr
 );
 
-/// Builds and validates a [`Model`].
+/// Builds and validates a [`Model`]: its own ([`ModelBuilder::new`], then
+/// [`ModelBuilder::build`]) or one rebuilt in place ([`ModelBuilder::in_place`], then
+/// [`ModelBuilder::finish`]), which keeps the model (16 KB in f64) off the stack.
 #[derive(Clone, Debug)]
-pub struct ModelBuilder<T: Real> {
-    m: Model<T>,
+pub struct ModelBuilder<T: Real, M = OwnedModel<T>> {
+    m: M,
+    scalar: PhantomData<T>,
+}
+
+/// The model a [`ModelBuilder::new`] owns.
+#[derive(Clone, Debug)]
+pub struct OwnedModel<T: Real>(Model<T>);
+
+impl<T: Real> Deref for OwnedModel<T> {
+    type Target = Model<T>;
+    fn deref(&self) -> &Model<T> {
+        &self.0
+    }
+}
+
+impl<T: Real> DerefMut for OwnedModel<T> {
+    fn deref_mut(&mut self) -> &mut Model<T> {
+        &mut self.0
+    }
 }
 
 impl<T: Real> Default for ModelBuilder<T> {
@@ -277,26 +336,70 @@ impl<T: Real> Default for ModelBuilder<T> {
     }
 }
 
+/// Gravity of a new model, m/s² (SPEC: g along -y).
+fn default_gravity<T: Real>() -> Vec2<T> {
+    Vec2::new(T::zero(), T::c(-9.81))
+}
+
+/// sqrt(eps)/10: 1.5e-9 for f64, 3.5e-5 for f32 (the sine of the transmission angle of
+/// a dyad at which W counts as singular).
+fn default_singular_tol<T: Real>() -> T {
+    T::EPS.sqrt() * T::c(0.1)
+}
+
 impl<T: Real> ModelBuilder<T> {
     /// An empty mechanism with gravity `(0, -9.81)` m/s² (SPEC: g along -y).
     pub fn new() -> Self {
         ModelBuilder {
-            m: Model {
+            m: OwnedModel(Model {
                 ground: heapless::Vec::new(),
                 links: heapless::Vec::new(),
                 groups: heapless::Vec::new(),
                 drives: heapless::Vec::new(),
                 loads: heapless::Vec::new(),
-                gravity: Vec2::new(T::zero(), T::c(-9.81)),
+                gravity: default_gravity(),
                 dof: 0,
-                // sqrt(eps)/10: 1.5e-9 for f64, 3.5e-5 for f32 (the sine of the
-                // transmission angle of a dyad at which W counts as singular).
-                singular_tol: T::EPS.sqrt() * T::c(0.1),
+                singular_tol: default_singular_tol(),
                 newton_tol: T::zero(),
-            },
+            }),
+            scalar: PhantomData,
         }
     }
 
+    /// Validates the description and returns the model.
+    pub fn build(mut self) -> Result<Model<T>, ModelError> {
+        validate(&mut self.m)?;
+        Ok(self.m.0)
+    }
+}
+
+impl<'a, T: Real> ModelBuilder<T, &'a mut Model<T>> {
+    /// Rebuilds `model` in place: empties it to the state of [`ModelBuilder::new`]'s
+    /// model, then declares into it. Until [`ModelBuilder::finish`] succeeds, `model`
+    /// is not a valid model.
+    pub fn in_place(model: &'a mut Model<T>) -> Self {
+        model.ground.clear();
+        model.links.clear();
+        model.groups.clear();
+        model.drives.clear();
+        model.loads.clear();
+        model.gravity = default_gravity();
+        model.dof = 0;
+        model.singular_tol = default_singular_tol();
+        model.newton_tol = T::zero();
+        ModelBuilder {
+            m: model,
+            scalar: PhantomData,
+        }
+    }
+
+    /// Validates the model built in place.
+    pub fn finish(self) -> Result<(), ModelError> {
+        validate(self.m)
+    }
+}
+
+impl<T: Real, M: DerefMut<Target = Model<T>>> ModelBuilder<T, M> {
     /// The model as declared so far (group constructors resolve points in it).
     pub fn model(&self) -> &Model<T> {
         &self.m
@@ -366,72 +469,73 @@ impl<T: Real> ModelBuilder<T> {
             .map_err(|_| ModelError::Capacity("loads"))?;
         Ok(self)
     }
+}
 
-    /// Validates the description and returns the model.
-    pub fn build(mut self) -> Result<Model<T>, ModelError> {
-        let m = &mut self.m;
-        if !(m.gravity.x.finite() && m.gravity.y.finite()) {
-            return Err(ModelError::NonFinite("gravity"));
+/// Validates a declared model and completes its derived data (Newton tolerance, the
+/// drives' motor elements): the end of [`ModelBuilder::build`] and
+/// [`ModelBuilder::finish`].
+fn validate<T: Real>(m: &mut Model<T>) -> Result<(), ModelError> {
+    if !(m.gravity.x.finite() && m.gravity.y.finite()) {
+        return Err(ModelError::NonFinite("gravity"));
+    }
+    if !(m.singular_tol.finite() && m.singular_tol > T::zero()) {
+        return Err(ModelError::NotPositive("singularity threshold"));
+    }
+    let mut scale = T::one();
+    for p in m.ground.iter() {
+        finite2(p, "ground point")?;
+        scale = scale.max(p.x.abs()).max(p.y.abs());
+    }
+    for l in m.links.iter() {
+        finite(l.mass, "link mass")?;
+        finite(l.inertia, "link inertia")?;
+        finite2(&l.cog, "link COG")?;
+        if l.mass < T::zero() {
+            return Err(ModelError::Negative("link mass"));
         }
-        if !(m.singular_tol.finite() && m.singular_tol > T::zero()) {
-            return Err(ModelError::NotPositive("singularity threshold"));
+        if l.inertia < T::zero() {
+            return Err(ModelError::Negative("link inertia"));
         }
-        let mut scale = T::one();
-        for p in m.ground.iter() {
-            finite2(p, "ground point")?;
+        for p in l.points.iter() {
+            finite2(p, "link point")?;
             scale = scale.max(p.x.abs()).max(p.y.abs());
         }
-        for l in m.links.iter() {
-            finite(l.mass, "link mass")?;
-            finite(l.inertia, "link inertia")?;
-            finite2(&l.cog, "link COG")?;
-            if l.mass < T::zero() {
-                return Err(ModelError::Negative("link mass"));
-            }
-            if l.inertia < T::zero() {
-                return Err(ModelError::Negative("link inertia"));
-            }
-            for p in l.points.iter() {
-                finite2(p, "link point")?;
-                scale = scale.max(p.x.abs()).max(p.y.abs());
-            }
-        }
-        // Newton stops at 64 ulps of the mechanism's size: 1.4e-14 m per metre in f64.
-        m.newton_tol = T::c(64.0) * T::EPS * scale;
-        check_sequence(m)?;
-        let Model {
-            drives,
-            groups,
-            dof,
-            loads,
-            links,
-            ..
-        } = m;
-        for d in drives.iter_mut() {
-            if d.coord >= *dof {
-                return Err(ModelError::Coordinates(
-                    "a drive names a coordinate no motor element has",
-                ));
-            }
-            d.group = groups
-                .iter()
-                .position(|g| g.coord == Some(d.coord))
-                .map(|k| k as u8)
-                .ok_or(ModelError::Coordinates(
-                    "a drive names a coordinate no motor element has",
-                ))?;
-            d.motor.validate()?;
-        }
-        for l in loads.iter() {
-            if l.body == 0 || l.body as usize > links.len() {
-                return Err(ModelError::UnknownReference("load: body"));
-            }
-            finite2(&l.point, "load point")?;
-            finite2(&l.force, "load force")?;
-            finite(l.moment, "load moment")?;
-        }
-        Ok(self.m)
     }
+    // Newton stops at 64 ulps of the mechanism's size: 1.4e-14 m per metre in f64.
+    m.newton_tol = T::c(64.0) * T::EPS * scale;
+    check_sequence(m)?;
+    let Model {
+        drives,
+        groups,
+        dof,
+        loads,
+        links,
+        ..
+    } = m;
+    for d in drives.iter_mut() {
+        if d.coord >= *dof {
+            return Err(ModelError::Coordinates(
+                "a drive names a coordinate no motor element has",
+            ));
+        }
+        d.group = groups
+            .iter()
+            .position(|g| g.coord == Some(d.coord))
+            .map(|k| k as u8)
+            .ok_or(ModelError::Coordinates(
+                "a drive names a coordinate no motor element has",
+            ))?;
+        d.motor.validate()?;
+    }
+    for l in loads.iter() {
+        if l.body == 0 || l.body as usize > links.len() {
+            return Err(ModelError::UnknownReference("load: body"));
+        }
+        finite2(&l.point, "load point")?;
+        finite2(&l.force, "load force")?;
+        finite(l.moment, "load moment")?;
+    }
+    Ok(())
 }
 
 fn finite<T: Real>(x: T, what: &'static str) -> Result<(), ModelError> {

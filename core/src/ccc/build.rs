@@ -19,6 +19,7 @@ use crate::scalar::{Real, Vec2};
 use crate::structomat::{
     AssurGroup, AssurJoint, AssurLoop, AssurStep, DyadRrr, MotorR, PointRef, TriadRrRrRr,
 };
+use core::ops::DerefMut;
 
 /// Physical link numbers (SPEC 3).
 pub(crate) const CRANK: usize = 1;
@@ -38,7 +39,7 @@ const JOINED_I: u8 = 2;
 const _: () = assert!(crate::config::MAX_LINK_POINTS >= 3, "the rocker carries D");
 
 /// Where each physical link is in a mode's model.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub(crate) struct BodyMap<T> {
     /// Model body of physical link `p` (index `p`, 1..=8); 0 for a locked lever.
     pub body: [u8; 9],
@@ -103,13 +104,40 @@ pub(crate) fn build<T: Real>(
     coords: Coordinates,
     pose: &[T; 9],
 ) -> Result<(Model<T>, BodyMap<T>), ModelError> {
+    let mut b = ModelBuilder::new();
+    let map = declare(&mut b, p, mode, coords, pose)?;
+    Ok((b.build()?, map))
+}
+
+/// [`build`] into `model`, in place (the twin's step path: no model on the stack). On
+/// an error `model` is half-built.
+pub(crate) fn build_into<T: Real>(
+    p: &CccParams<T>,
+    mode: Mode,
+    coords: Coordinates,
+    pose: &[T; 9],
+    model: &mut Model<T>,
+) -> Result<BodyMap<T>, ModelError> {
+    let mut b = ModelBuilder::in_place(model);
+    let map = declare(&mut b, p, mode, coords, pose)?;
+    b.finish()?;
+    Ok(map)
+}
+
+/// Declares the model of [`build`] into the builder `b`; returns the body map.
+fn declare<T: Real, M: DerefMut<Target = Model<T>>>(
+    b: &mut ModelBuilder<T, M>,
+    p: &CccParams<T>,
+    mode: Mode,
+    coords: Coordinates,
+    pose: &[T; 9],
+) -> Result<BodyMap<T>, ModelError> {
     if !mode.coordinate_choices().contains(&coords) {
         return Err(ModelError::Coordinates(
             "converter: this coordinate choice does not drive this mode",
         ));
     }
     let th = |k: usize| pose.get(k).copied().unwrap_or(T::zero());
-    let mut b = ModelBuilder::new();
     b.gravity(p.gravity);
     let a = b.ground_point(p.a.x, p.a.y)?;
     let f = b.ground_point(p.f.x, p.f.y)?;
@@ -176,7 +204,7 @@ pub(crate) fn build<T: Real>(
         body: body(k),
         point,
     };
-    let motor = |b: &mut ModelBuilder<T>,
+    let motor = |b: &mut ModelBuilder<T, M>,
                  link: usize,
                  pivot: PointRef,
                  link_point: u8,
@@ -193,7 +221,7 @@ pub(crate) fn build<T: Real>(
     };
     // Dyad RRR of links `la` (on pole `pa` at its point `a_at`, joint at `a_j`) and
     // `lb` (on `pb` at `b_at`, joint at `b_j`), guessed at the current angles.
-    let rrr = |b: &mut ModelBuilder<T>,
+    let rrr = |b: &mut ModelBuilder<T, M>,
                (la, pa, a_at, a_j): (usize, PointRef, u8, u8),
                (lb, pb, b_at, b_j): (usize, PointRef, u8, u8)|
      -> Result<(), ModelError> {
@@ -213,47 +241,43 @@ pub(crate) fn build<T: Real>(
     // Recurring dyads: the crank and coupler from C (RRR(1,2)), the rocker and swing
     // link from D (RRR(3,4)), a free diode branch from D (RRR(rod, lever)).
     let crank_from_c =
-        |b: &mut ModelBuilder<T>| rrr(b, (COUPLER, pt(ROCKER, P1), P1, P0), (CRANK, a, P0, P1));
-    let rocker_from = |b: &mut ModelBuilder<T>, d: PointRef| {
+        |b: &mut ModelBuilder<T, M>| rrr(b, (COUPLER, pt(ROCKER, P1), P1, P0), (CRANK, a, P0, P1));
+    let rocker_from = |b: &mut ModelBuilder<T, M>, d: PointRef| {
         rrr(b, (ROCKER, d, ROCKER_D, P0), (SWING, f, P0, P1))
     };
-    let free_branch = |b: &mut ModelBuilder<T>, k: usize| {
+    let free_branch = |b: &mut ModelBuilder<T, M>, k: usize| {
         let (rod, lever) = BRANCHES[k];
         rrr(b, (rod, pt(ROCKER, ROCKER_D), P0, P1), (lever, h, P0, P1))
     };
     let locked = clutches.iter().position(|c| *c == Clutch::Locked);
     match coords {
         Coordinates::CrankSwing => {
-            motor(&mut b, CRANK, a, P0, 0)?;
-            motor(&mut b, SWING, f, P0, 1)?;
+            motor(b, CRANK, a, P0, 0)?;
+            motor(b, SWING, f, P0, 1)?;
             rrr(
-                &mut b,
+                b,
                 (COUPLER, pt(CRANK, P1), P0, P1),
                 (ROCKER, pt(SWING, P1), P0, P1),
             )?;
             map.coord_link = [CRANK as u8, SWING as u8];
         }
         Coordinates::CrankCoupler => {
-            motor(&mut b, CRANK, a, P0, 0)?;
-            motor(&mut b, COUPLER, pt(CRANK, P1), P0, 1)?;
-            rrr(
-                &mut b,
-                (ROCKER, pt(COUPLER, P1), P1, P0),
-                (SWING, f, P0, P1),
-            )?;
+            motor(b, CRANK, a, P0, 0)?;
+            motor(b, COUPLER, pt(CRANK, P1), P0, 1)?;
+            rrr(b, (ROCKER, pt(COUPLER, P1), P1, P0), (SWING, f, P0, P1))?;
             map.coord_link = [CRANK as u8, COUPLER as u8];
         }
         Coordinates::SwingRocker => {
-            motor(&mut b, SWING, f, P0, 0)?;
-            motor(&mut b, ROCKER, pt(SWING, P1), P0, 1)?;
-            crank_from_c(&mut b)?;
+            motor(b, SWING, f, P0, 0)?;
+            motor(b, ROCKER, pt(SWING, P1), P0, 1)?;
+            crank_from_c(b)?;
             map.coord_link = [SWING as u8, ROCKER as u8];
         }
         Coordinates::Crank if joined => {
             // A68 driven by its crank (SPEC 3: crank reversals happen in A68 too, and
             // the lever cannot carry the crank through them): R(1) + the six-link
             // Assur group of links 2, 3, 4, 5, 7 and the joined levers, 9 joints.
-            motor(&mut b, CRANK, a, P0, 0)?;
+            motor(b, CRANK, a, P0, 0)?;
             let (rod5, lever6) = BRANCHES[0];
             let (rod7, _) = BRANCHES[1];
             let links = [
@@ -327,7 +351,7 @@ pub(crate) fn build<T: Real>(
                 ],
             })?;
             map.coord_link = [CRANK as u8, 0];
-            return b.build().map(|m| (m, map));
+            return Ok(map);
         }
         Coordinates::Crank | Coordinates::Swing | Coordinates::Rod => {
             let Some(k) = locked.filter(|_| mode.dof() == 1) else {
@@ -339,7 +363,7 @@ pub(crate) fn build<T: Real>(
             let pin = pin[k].ok_or(ModelError::Coordinates("converter: no locked pin"))?;
             match coords {
                 Coordinates::Crank => {
-                    motor(&mut b, CRANK, a, P0, 0)?;
+                    motor(b, CRANK, a, P0, 0)?;
                     b.group(&TriadRrRrRr {
                         ternary: body(ROCKER),
                         ternary_joints: [P1, P0, ROCKER_D],
@@ -352,39 +376,35 @@ pub(crate) fn build<T: Real>(
                     map.coord_link = [CRANK as u8, 0];
                 }
                 Coordinates::Swing => {
-                    motor(&mut b, SWING, f, P0, 0)?;
-                    rrr(
-                        &mut b,
-                        (ROCKER, pt(SWING, P1), P0, ROCKER_D),
-                        (rod, pin, P1, P0),
-                    )?;
-                    crank_from_c(&mut b)?;
+                    motor(b, SWING, f, P0, 0)?;
+                    rrr(b, (ROCKER, pt(SWING, P1), P0, ROCKER_D), (rod, pin, P1, P0))?;
+                    crank_from_c(b)?;
                     map.coord_link = [SWING as u8, 0];
                 }
                 _ => {
-                    motor(&mut b, rod, pin, P1, 0)?;
-                    rocker_from(&mut b, pt(rod, P0))?;
-                    crank_from_c(&mut b)?;
+                    motor(b, rod, pin, P1, 0)?;
+                    rocker_from(b, pt(rod, P0))?;
+                    crank_from_c(b)?;
                     map.coord_link = [rod as u8, 0];
                 }
             }
-            free_branch(&mut b, 1 - k)?;
+            free_branch(b, 1 - k)?;
             map.dof = 1;
-            return b.build().map(|m| (m, map));
+            return Ok(map);
         }
         Coordinates::Lever => {
             let (rod5, lever6) = BRANCHES[0];
             let (rod7, _) = BRANCHES[1];
-            motor(&mut b, lever6, h, P0, 0)?;
+            motor(b, lever6, h, P0, 0)?;
             rrr(
-                &mut b,
+                b,
                 (rod5, pt(lever6, P1), P1, P0),
                 (rod7, pt(lever6, JOINED_I), P1, P0),
             )?;
-            rocker_from(&mut b, pt(rod5, P0))?;
-            crank_from_c(&mut b)?;
+            rocker_from(b, pt(rod5, P0))?;
+            crank_from_c(b)?;
             map.coord_link = [lever6 as u8, 0];
-            return b.build().map(|m| (m, map));
+            return Ok(map);
         }
         Coordinates::Rest => {
             let (Some(g), Some(i)) = (pin[0], pin[1]) else {
@@ -394,16 +414,16 @@ pub(crate) fn build<T: Real>(
             };
             let (rod5, _) = BRANCHES[0];
             let (rod7, _) = BRANCHES[1];
-            rrr(&mut b, (rod5, g, P1, P0), (rod7, i, P1, P0))?;
-            rocker_from(&mut b, pt(rod5, P0))?;
-            crank_from_c(&mut b)?;
-            return b.build().map(|m| (m, map));
+            rrr(b, (rod5, g, P1, P0), (rod7, i, P1, P0))?;
+            rocker_from(b, pt(rod5, P0))?;
+            crank_from_c(b)?;
+            return Ok(map);
         }
     }
     // The 2-DOF sequences end with both diode branches as free dyads.
-    free_branch(&mut b, 0)?;
-    free_branch(&mut b, 1)?;
-    b.build().map(|m| (m, map))
+    free_branch(b, 0)?;
+    free_branch(b, 1)?;
+    Ok(map)
 }
 
 /// The physical link angles (rad, index 1..=8) of the converter assembled at crank

@@ -2,7 +2,7 @@
 //! the equations of motion with the twin's inputs, the physical state of every link,
 //! the transmitted torques c6, c8 and the joint reactions.
 
-use super::build::{build, physical_link, BodyMap, BRANCHES, CRANK};
+use super::build::{build_into, physical_link, BodyMap, BRANCHES, CRANK};
 use super::mode::{Clutch, Coordinates, Mode};
 use super::params::CccParams;
 use crate::dynamics::solve_accelerations;
@@ -10,7 +10,7 @@ use crate::error::{GroupId, StepError};
 use crate::integrator::OdeSystem;
 use crate::kinematics::assemble;
 use crate::kinematics::group_id;
-use crate::model::Model;
+use crate::model::{Model, ModelBuilder};
 use crate::motor::Motor;
 use crate::scalar::{cross, perp, rotate_cs, Real, Vec2};
 use crate::structomat::GroupKind;
@@ -65,7 +65,7 @@ pub struct LinkState<T: Real> {
 }
 
 /// A mode's model and workspace.
-#[derive(Clone, Debug)]
+#[derive(Debug)]
 pub(crate) struct Slot<T: Real> {
     pub model: Model<T>,
     pub map: BodyMap<T>,
@@ -74,34 +74,74 @@ pub(crate) struct Slot<T: Real> {
     pub coords: Coordinates,
 }
 
+impl<T: Real> Clone for Slot<T> {
+    fn clone(&self) -> Self {
+        Slot {
+            model: self.model.clone(),
+            map: self.map,
+            ws: self.ws.clone(),
+            mode: self.mode,
+            coords: self.coords,
+        }
+    }
+
+    /// In place (the twin's pre-step backup): no temporary slot on the stack.
+    fn clone_from(&mut self, source: &Self) {
+        self.model.clone_from(&source.model);
+        self.map = source.map;
+        self.ws.clone_from(&source.ws);
+        self.mode = source.mode;
+        self.coords = source.coords;
+    }
+}
+
 impl<T: Real> Slot<T> {
-    /// Builds the model of `mode` driven by `coords` at the physical angles `pose`
-    /// (index 1..=8) and assembles it there. Returns the slot and its coordinates.
-    pub fn new(
+    /// A slot to build into: an empty model (no links), not assembled.
+    pub fn empty() -> Self {
+        Slot {
+            model: ModelBuilder::new().model().clone(),
+            map: BodyMap::default(),
+            ws: Workspace::new(),
+            mode: Mode::Free,
+            coords: Coordinates::CrankSwing,
+        }
+    }
+
+    /// Builds, in this slot, the model of `mode` driven by `coords` at the physical
+    /// angles `pose` (index 1..=8) and assembles it there; returns its coordinates. In
+    /// place, so that no slot (30 KB in f64) is ever a temporary on the stack. On an
+    /// error the slot holds a half-built mode and must be rebuilt before use.
+    pub fn rebuild(
+        &mut self,
         params: &CccParams<T>,
         mode: Mode,
         coords: Coordinates,
         pose: &[T; 9],
         time: f64,
-    ) -> Result<(Self, [T; 2]), StepError> {
-        let (model, map) = build(params, mode, coords, pose).map_err(|_| StepError::NonFinite {
-            time,
-            what: "converter model at this pose",
+    ) -> Result<[T; 2], StepError> {
+        self.map = build_into(params, mode, coords, pose, &mut self.model).map_err(|_| {
+            StepError::NonFinite {
+                time,
+                what: "converter model at this pose",
+            }
         })?;
-        let q = map.coordinates_at(pose);
-        let mut ws = Workspace::new();
-        assemble(&model, &mut ws, q.get(..map.dof).unwrap_or(&[]))
-            .map_err(|e| physical(&map, retime(e, time)))?;
-        Ok((
-            Slot {
-                model,
-                map,
-                ws,
-                mode,
-                coords,
-            },
-            q,
-        ))
+        self.mode = mode;
+        self.coords = coords;
+        self.ws.reset();
+        self.assemble_at(pose, time)
+    }
+
+    /// Assembles the slot's model at the physical angles `pose` from a fresh workspace;
+    /// returns the coordinates there.
+    fn assemble_at(&mut self, pose: &[T; 9], time: f64) -> Result<[T; 2], StepError> {
+        let q = self.map.coordinates_at(pose);
+        assemble(
+            &self.model,
+            &mut self.ws,
+            q.get(..self.map.dof).unwrap_or(&[]),
+        )
+        .map_err(|e| physical(&self.map, retime(e, time)))?;
+        Ok(q)
     }
 
     /// Model body of physical link `p` (0: held still).

@@ -383,7 +383,8 @@ impl<T: Real> Twin<T> {
         } else {
             Mode::Free
         };
-        let (slot, q) = best_slot(&params, mode, &pose, 0.0)?;
+        let mut slot = Slot::empty();
+        let q = best_slot(&params, mode, &pose, 0.0, &mut slot)?;
         let mut y = SVector::<T, STATE>::zeros();
         // Initial link speeds: those of the crank and the swing link (the others follow
         // from the kinematics; the first choice of a 2-DOF mode is crank + swing link).
@@ -871,8 +872,7 @@ impl<T: Real> Twin<T> {
         }
         // Generalized momentum space of the unconstrained diode: the 2-DOF model, plus the
         // shaft when it has inertia.
-        let (reference, qr) = best_slot(&self.params, Mode::I0, &pose, time)?;
-        self.reference = reference;
+        let qr = best_slot(&self.params, Mode::I0, &pose, time, &mut self.reference)?;
         let mut yr = SVector::<T, STATE>::zeros();
         for k in 0..2 {
             yr[k] = qr[k];
@@ -1012,10 +1012,9 @@ impl<T: Real> Twin<T> {
         let scale_w = omega.iter().fold(T::one(), |a, w| a.max(w.abs()));
         let mut ok = false;
         for coords in m.coordinate_choices().iter().copied() {
-            let Ok((slot, q)) = Slot::new(&self.params, m, coords, pose, time) else {
+            let Ok(q) = self.cand.rebuild(&self.params, m, coords, pose, time) else {
                 continue;
             };
-            self.cand = slot;
             let mut y = w.y;
             load_state(&self.cand, &q, &omega, &mut y);
             if self.cand.eval(w.t, &y, inputs, self.drive).is_err() {
@@ -1100,15 +1099,23 @@ impl<T: Real> Twin<T> {
         let now = self.slot.conditioning();
         let mut best: Option<(T, Coordinates)> = None;
         let skip = failed.map(|_| self.slot.coords);
-        // Only the winner's choice is kept (and built again below): holding a second
-        // slot here would double this frame's stack.
-        let mut failures = scan_choices(&self.params, mode, &pose, time, skip, |coords, s, _| {
-            let cond = s.conditioning();
-            if best.as_ref().is_none_or(|(b, _)| cond > *b) {
-                best = Some((cond, coords));
-            }
-            false
-        })?;
+        // The choices are assembled in the scratch slot and only the winner's choice is
+        // kept (built again below): no slot is ever a temporary on the stack.
+        let mut failures = scan_choices(
+            &self.params,
+            mode,
+            &pose,
+            time,
+            skip,
+            &mut self.cand,
+            |coords, s, _| {
+                let cond = s.conditioning();
+                if best.as_ref().is_none_or(|(b, _)| cond > *b) {
+                    best = Some((cond, coords));
+                }
+                false
+            },
+        )?;
         let Some((cond, coords)) = best else {
             if let Some(StepError::Group { group, fault, .. }) =
                 failed.map(|e| physical(&self.slot.map, e))
@@ -1131,10 +1138,12 @@ impl<T: Real> Twin<T> {
         if coords == self.slot.coords || !(failed.is_some() || cond > now * T::c(1.5)) {
             return Ok(());
         }
-        let (slot, q) =
-            Slot::new(&self.params, mode, coords, &pose, time).map_err(TwinError::Step)?;
+        let q = self
+            .cand
+            .rebuild(&self.params, mode, coords, &pose, time)
+            .map_err(TwinError::Step)?;
         let from = self.slot.coords;
-        self.slot = slot;
+        core::mem::swap(&mut self.slot, &mut self.cand);
         let omega: [T; 9] = core::array::from_fn(|p| links[p].omega);
         load_state(&self.slot, &q, &omega, &mut w.y);
         self.dp5.invalidate();
@@ -1481,53 +1490,67 @@ fn fired<T: Real>(g0: &Guards<T>, g1: &Guards<T>) -> u8 {
     bits
 }
 
-/// The first choice of `mode`'s coordinates that assembles at `pose` well conditioned,
-/// else the best conditioned that assembles.
+/// Builds into `slot` the first choice of `mode`'s coordinates that assembles at `pose`
+/// well conditioned, else the best conditioned that assembles; returns its coordinates.
+/// On an error `slot` is half-built.
 fn best_slot<T: Real>(
     params: &CccParams<T>,
     mode: Mode,
     pose: &[T; 9],
     time: f64,
-) -> Result<(Slot<T>, [T; 2]), TwinError> {
-    let mut best: Option<(Slot<T>, [T; 2])> = None;
-    let failures = scan_choices(params, mode, pose, time, None, |_, s, q| {
-        let good = s.conditioning() >= T::c(0.2);
-        if good
-            || best
-                .as_ref()
-                .is_none_or(|(b, _)| s.conditioning() > b.conditioning())
-        {
-            best = Some((s, q));
+    slot: &mut Slot<T>,
+) -> Result<[T; 2], TwinError> {
+    // (conditioning, choice, coordinates) of the best so far; `good`: the scan stopped
+    // on a well-conditioned choice, which `slot` therefore holds.
+    let mut best: Option<(T, Coordinates, [T; 2])> = None;
+    let mut good = false;
+    let failures = scan_choices(params, mode, pose, time, None, slot, |coords, s, q| {
+        let cond = s.conditioning();
+        good = cond >= T::c(0.2);
+        if good || best.is_none_or(|(b, _, _)| cond > b) {
+            best = Some((cond, coords, q));
         }
         good
     })?;
-    best.ok_or(TwinError::Mechanism {
-        time,
-        mode,
-        failures,
-    })
+    let Some((_, coords, q)) = best else {
+        return Err(TwinError::Mechanism {
+            time,
+            mode,
+            failures,
+        });
+    };
+    if good {
+        Ok(q)
+    } else {
+        // Later choices (or failed attempts) overwrote the best one: build it again
+        // (the same pose, so the same bits).
+        slot.rebuild(params, mode, coords, pose, time)
+            .map_err(TwinError::Step)
+    }
 }
 
 /// Assembles `mode` at `pose` in each of its coordinate choices but `skip`, in order,
-/// and hands each that assembles to `take` with its coordinates (`take` returns `true`
-/// to stop there). Returns the groups that failed in the others; an error that is not
-/// a group's (a non-finite input) ends the scan.
+/// into `slot`, and hands each that assembles to `take` with its coordinates (`take`
+/// returns `true` to stop there). Returns the groups that failed in the others; an
+/// error that is not a group's (a non-finite input) ends the scan. `slot` holds the
+/// last choice tried.
 fn scan_choices<T: Real>(
     params: &CccParams<T>,
     mode: Mode,
     pose: &[T; 9],
     time: f64,
     skip: Option<Coordinates>,
-    mut take: impl FnMut(Coordinates, Slot<T>, [T; 2]) -> bool,
+    slot: &mut Slot<T>,
+    mut take: impl FnMut(Coordinates, &Slot<T>, [T; 2]) -> bool,
 ) -> Result<heapless::Vec<Failure, 3>, TwinError> {
     let mut failures: heapless::Vec<Failure, 3> = heapless::Vec::new();
     for coords in mode.coordinate_choices().iter().copied() {
         if Some(coords) == skip {
             continue;
         }
-        match Slot::new(params, mode, coords, pose, time) {
-            Ok((s, q)) => {
-                if take(coords, s, q) {
+        match slot.rebuild(params, mode, coords, pose, time) {
+            Ok(q) => {
+                if take(coords, slot, q) {
                     break;
                 }
             }
