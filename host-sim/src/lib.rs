@@ -24,12 +24,13 @@ pub mod scenarios;
 pub use ccc::{CccScenario, CccSummary, End};
 pub use cli::{parse_args, Command, Output, RunOptions, UsageError, HINT, USAGE};
 pub use columns::{Column, Layout};
-pub use run::{simulate, step_count, MaxReaction, MeanSpeed, RunError, Summary, MAX_STEPS};
+pub use run::{simulate, step_count, MaxReaction, MeanSpeed, RunError, Steps, Summary, MAX_STEPS};
 pub use scenarios::ScenarioId;
 
 use std::ffi::OsString;
 use std::fs::File;
 use std::io::{self, BufWriter, Write};
+use std::path::Path;
 
 /// Exit code of a successful command.
 pub const EXIT_OK: u8 = 0;
@@ -110,13 +111,7 @@ pub fn execute(opts: &RunOptions, stdout: &mut dyn Write, stderr: &mut dyn Write
     }
     let result = match &opts.out {
         Output::Stdout => dispatch(opts, stdout, "stdout").map(|s| (s, false)),
-        Output::File(path) => {
-            let target = path.display().to_string();
-            match File::create(path) {
-                Ok(f) => dispatch(opts, &mut BufWriter::new(f), &target).map(|s| (s, true)),
-                Err(error) => Err(RunError::Write { target, error }),
-            }
-        }
+        Output::File(path) => run_to_file(opts, path).map(|s| (s, true)),
     };
     match result {
         Ok((summary, to_stdout)) => {
@@ -147,6 +142,15 @@ pub(crate) fn report_run_error(e: RunError, stderr: &mut dyn Write) -> u8 {
             }
             e.exit_code()
         }
+    }
+}
+
+/// Runs the mechanism scenario of `opts` with its CSV to the file `path`.
+pub(crate) fn run_to_file(opts: &RunOptions, path: &Path) -> Result<Summary, RunError> {
+    let target = path.display().to_string();
+    match File::create(path) {
+        Ok(f) => dispatch(opts, &mut BufWriter::new(f), &target),
+        Err(error) => Err(RunError::Write { target, error }),
     }
 }
 
