@@ -16,6 +16,11 @@
 //! any N and the same as each run alone ([`batch`]). Its job runner, [`run_jobs`], runs
 //! any slice of jobs on N threads and returns the results in job order.
 //!
+//! The output is deterministic: the same command writes the same bytes on every run,
+//! in debug and release builds, on 1 or N threads (the core's math is `libm`; the
+//! golden SHA-256 hashes of every built-in scenario's CSV are pinned in
+//! `host-sim/tests/golden.rs`).
+//!
 //! The binary is a thin wrapper over [`main_with`]; tests and benches can call
 //! [`parse_args`], [`simulate`] or [`main_with`] directly.
 
