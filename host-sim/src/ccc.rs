@@ -7,8 +7,8 @@
 //! (SPEC 3), reported in the summary. Any other failed step is exit code 1, after the
 //! rows and log lines before it are written and the summary is printed.
 
-use crate::cli::{Output, RunOptions, UsageError};
-use crate::run::{step_count, RunError};
+use crate::cli::{Output, RunOptions};
+use crate::run::{precision, RunError, Steps};
 use crate::scenarios::ScenarioId;
 use std::fmt;
 use std::fs::File;
@@ -403,11 +403,7 @@ pub fn simulate<T: Real>(
     csv: Sink<'_>,
     mut logs: Option<(Sink<'_>, Sink<'_>)>,
 ) -> Result<CccSummary, RunError> {
-    let precision = if core::mem::size_of::<T>() == 4 {
-        "f32"
-    } else {
-        "f64"
-    };
+    let precision = precision::<T>();
     let name = opts.scenario.name();
     let settings = opts
         .scenario
@@ -418,15 +414,7 @@ pub fn simulate<T: Real>(
             ))
         })?
         .with_options(opts);
-    let h64 = opts.h.unwrap_or(settings.h);
-    let t_end = opts.t_end.unwrap_or(settings.t_end);
-    let h = T::c(h64);
-    if !(h.finite() && h > T::zero()) {
-        return Err(RunError::Usage(UsageError(format!(
-            "--h: {h64} s is not a positive {precision}"
-        ))));
-    }
-    let n = step_count(h64, t_end).map_err(RunError::Usage)?;
+    let (Steps { t_end, n, .. }, h) = Steps::of::<T>(opts)?;
     let every = opts.every.max(1);
 
     let mut params = CccParams::<T>::reference();
@@ -671,7 +659,9 @@ pub fn execute(opts: &RunOptions, stdout: &mut dyn Write, stderr: &mut dyn Write
     }
 }
 
-fn run_to_files(opts: &RunOptions, path: &Path) -> Result<CccSummary, RunError> {
+/// Runs the converter scenario of `opts` with its state CSV to the file `path` and the
+/// logs next to it ([`log_paths`]).
+pub(crate) fn run_to_files(opts: &RunOptions, path: &Path) -> Result<CccSummary, RunError> {
     let (events, switches) = log_paths(path);
     let create = |p: &Path| {
         File::create(p)

@@ -12,6 +12,8 @@ host-sim: simulate the built-in mechanisms of the structomat core
 Usage:
   host-sim list                      list the built-in scenarios and their formulas
   host-sim run <scenario> [options]  simulate a scenario and write CSV
+  host-sim batch FILE --out-dir DIR [--threads N] [--quiet]
+                                     run the runs listed in FILE, N at a time
   host-sim help | --help | -h        show this help
 
 Scenarios: slider-crank, five-bar (mechanisms);
@@ -66,6 +68,34 @@ t_end = 1 s): a row at t = 0, every N-th step and the last state, columns
   The summary gives the first breakaway, the events by kind, the coordinate switches,
   the energy audit and how the run ended; it is printed also when a step fails.
   ccc-s1 ending at the mechanism's singularity is its expected end: exit status 0.
+
+Batch (host-sim batch FILE --out-dir DIR):
+  FILE lists one run a line, written like the arguments of run, e.g.
+    ccc-s2 --load 600 --motor 10 --t-end 0.3
+  without --out (the batch names the files); '#' starts a comment, blank lines are
+  skipped. Every line is checked before anything runs: a bad line is an error naming
+  its line number (exit status 2).
+  --out-dir DIR      where the files go (created if missing; files of the same names
+                     are replaced)
+  --threads N        runs at a time, on N threads (default 2); the files are the same
+                     for any N
+  --quiet            no progress lines, no closing summary
+  Files, for job k (0, 1, ... in line order, written with at least 3 digits):
+  k-<scenario>.csv, and for the converter scenarios k-<scenario>.events.csv and
+  .switches.csv: byte for byte what `host-sim run <line> --out k-<scenario>.csv` writes.
+  batch.csv, one row per job in job order, columns
+  job line scenario args file   job index, its line in FILE, the scenario, the
+                                line's arguments, the job's CSV file name
+  exit end                      the exit status the run alone gives; how it ended:
+                                completed, singularity (ccc-s1's expected end), failed
+                                (a step failed) or error (setup, file)
+  steps time rows               steps completed, time of the last state, s (empty when a
+                                mechanism's step failed), CSV data rows
+  first_breakaway events switches audit_residual
+                                converter runs: first breakaway, s (empty if none),
+                                events, coordinate switches, energy audit residual, J
+  message                       the error of a run that did not complete
+  Exit status: 0 when every run succeeded (exit status 0 alone), 1 otherwise.
 
 Exit status: 0 success, 1 run failure (step error, file error), 2 bad arguments.
 ";
@@ -127,6 +157,23 @@ impl RunOptions {
     }
 }
 
+/// The most threads `host-sim batch --threads` takes (a guard against a typo that
+/// would spawn thousands).
+pub const MAX_THREADS: usize = 256;
+
+/// Options of `host-sim batch`.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct BatchOptions {
+    /// The batch file: one run a line.
+    pub file: PathBuf,
+    /// Where the files go.
+    pub out_dir: PathBuf,
+    /// Runs at a time (1..=[`MAX_THREADS`]).
+    pub threads: usize,
+    /// No progress lines, no closing summary.
+    pub quiet: bool,
+}
+
 /// A parsed command line.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Command {
@@ -136,6 +183,8 @@ pub enum Command {
     List,
     /// `host-sim run <scenario> [options]`.
     Run(RunOptions),
+    /// `host-sim batch FILE --out-dir DIR [--threads N] [--quiet]`.
+    Batch(BatchOptions),
 }
 
 /// A bad command line: the one-line message names the argument and what is wrong.
@@ -169,7 +218,7 @@ where
         }
     }
     let Some(command) = words.first() else {
-        return Err(usage_err("missing command (list, run or help)"));
+        return Err(usage_err("missing command (list, run, batch or help)"));
     };
     let rest = &words[1..];
     match command.as_str() {
@@ -180,11 +229,12 @@ where
             Some(a) => Err(usage_err(format!("list: unexpected argument '{a}'"))),
         },
         "run" => parse_run(rest),
+        "batch" => parse_batch(rest),
         other if other.starts_with('-') => Err(usage_err(format!(
-            "unknown option '{other}' before the command (commands: list, run, help)"
+            "unknown option '{other}' before the command (commands: list, run, batch, help)"
         ))),
         other => Err(usage_err(format!(
-            "unknown command '{other}' (commands: list, run, help)"
+            "unknown command '{other}' (commands: list, run, batch, help)"
         ))),
     }
 }
@@ -278,6 +328,82 @@ fn parse_run(args: &[String]) -> Result<Command, UsageError> {
         load,
         motor,
     }))
+}
+
+fn parse_batch(args: &[String]) -> Result<Command, UsageError> {
+    let (mut file, mut out_dir, mut threads, mut quiet) = (None, None, 2, false);
+    let mut k = 0;
+    while k < args.len() {
+        let arg = args[k].as_str();
+        k += 1;
+        if is_help(arg) {
+            return Ok(Command::Help);
+        }
+        if arg == "-" || !arg.starts_with('-') {
+            if file.is_some() {
+                return Err(usage_err(format!(
+                    "batch: unexpected argument '{arg}' (one batch file)"
+                )));
+            }
+            file = Some(PathBuf::from(arg));
+            continue;
+        }
+        let (name, inline) = match arg.split_once('=') {
+            Some((n, v)) if n.starts_with("--") => (n, Some(v.to_string())),
+            _ => (arg, None),
+        };
+        match name {
+            "--quiet" => {
+                if inline.is_some() {
+                    return Err(usage_err(format!("{name}: takes no value (got '{arg}')")));
+                }
+                quiet = true;
+            }
+            "--out-dir" | "--threads" => {
+                let value = match inline {
+                    Some(v) => v,
+                    None => {
+                        let v = args
+                            .get(k)
+                            .ok_or_else(|| usage_err(format!("{name}: missing value")))?;
+                        k += 1;
+                        v.clone()
+                    }
+                };
+                if name == "--threads" {
+                    threads = parse_threads(&value)?;
+                } else if value.is_empty() {
+                    return Err(usage_err("--out-dir: empty directory name"));
+                } else {
+                    out_dir = Some(PathBuf::from(value));
+                }
+            }
+            _ => return Err(usage_err(format!("batch: unknown option '{name}'"))),
+        }
+    }
+    let file = file.ok_or_else(|| usage_err("batch: missing batch file"))?;
+    let out_dir = out_dir.ok_or_else(|| usage_err("batch: missing --out-dir DIR"))?;
+    Ok(Command::Batch(BatchOptions {
+        file,
+        out_dir,
+        threads,
+        quiet,
+    }))
+}
+
+fn parse_threads(value: &str) -> Result<usize, UsageError> {
+    let what = format!("a whole number 1..={MAX_THREADS} expected");
+    let n: usize = value.trim().parse().map_err(|_| {
+        usage_err(format!(
+            "--threads: '{value}' is not a whole number ({what})"
+        ))
+    })?;
+    if !(1..=MAX_THREADS).contains(&n) {
+        return Err(usage_err(format!(
+            "--threads: {n} is out of range ({what})"
+        )));
+    }
+    Ok(n)
 }
 
 /// `--ccw`, `--load` and `--motor` apply to the converter scenarios only, and `--ccw`
@@ -483,6 +609,57 @@ mod tests {
     }
 
     #[test]
+    fn batch_options() {
+        let c = parse(&[
+            "batch",
+            "--threads=3",
+            "b.batch",
+            "--out-dir",
+            "out",
+            "--quiet",
+        ]);
+        assert_eq!(
+            c,
+            Ok(Command::Batch(BatchOptions {
+                file: "b.batch".into(),
+                out_dir: "out".into(),
+                threads: 3,
+                quiet: true,
+            }))
+        );
+        let Ok(Command::Batch(b)) = parse(&["batch", "b", "--out-dir=o"]) else {
+            panic!("batch b --out-dir=o")
+        };
+        assert_eq!(b.threads, 2, "default threads");
+        for (args, needle) in [
+            (&["batch", "--out-dir", "o"][..], "missing batch file"),
+            (&["batch", "b"][..], "missing --out-dir"),
+            (&["batch", "b", "--out-dir", ""][..], "--out-dir: empty"),
+            (&["batch", "b", "--out-dir"][..], "--out-dir: missing value"),
+            (
+                &["batch", "b", "--out-dir", "o", "--threads", "0"][..],
+                "--threads: 0",
+            ),
+            (
+                &["batch", "b", "--out-dir", "o", "--threads", "x"][..],
+                "'x'",
+            ),
+            (
+                &["batch", "b", "--out-dir", "o", "--threads", "257"][..],
+                "257",
+            ),
+            (&["batch", "b", "c", "--out-dir", "o"][..], "'c'"),
+            (
+                &["batch", "b", "--out-dir", "o", "--t-end", "1"][..],
+                "'--t-end'",
+            ),
+        ] {
+            let e = parse(args).unwrap_err();
+            assert!(e.0.contains(needle), "{args:?}: {e}");
+        }
+    }
+
+    #[test]
     fn help_anywhere() {
         for args in [
             &["help"][..],
@@ -490,6 +667,7 @@ mod tests {
             &["--help"],
             &["run", "--help"],
             &["run", "five-bar", "-h"],
+            &["batch", "--help"],
         ] {
             assert_eq!(parse(args), Ok(Command::Help), "{args:?}");
         }

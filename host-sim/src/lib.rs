@@ -3,33 +3,47 @@
 //! A command-line simulator of the built-in mechanisms of the `structomat` core
 //! ([`structomat::mechanisms`]): `host-sim list`, `host-sim run <scenario> [options]`
 //! (CSV of the state, the applied and kinetostatic driving torques and the joint
-//! reactions, plus a summary), `host-sim help`.
+//! reactions, plus a summary), `host-sim batch` (below), `host-sim help`.
 //!
 //! It also runs the Constantinesco torque converter's scenarios S1 and S2 (SPEC 3) on
 //! the core's digital twin: `host-sim run ccc-s1|ccc-s2 [--motor N·M] [--load N·M]
 //! [--ccw]` writes the state CSV, the logs of the mode changes and of the coordinate
 //! switches, and a summary ([`ccc`]).
 //!
+//! `host-sim batch FILE --out-dir DIR [--threads N]` runs the runs listed in a batch
+//! file (one `host-sim run` argument list a line) N at a time, each into its own files,
+//! plus a table `batch.csv` of their outcomes; the files are byte for byte the same for
+//! any N and the same as each run alone ([`batch`]). Its job runner, [`run_jobs`], runs
+//! any slice of jobs on N threads and returns the results in job order.
+//!
+//! The output is deterministic: the same command writes the same bytes on every run,
+//! in debug and release builds, on 1 or N threads (the core's math is `libm`; the
+//! golden SHA-256 hashes of every built-in scenario's CSV are pinned in
+//! `host-sim/tests/golden.rs`).
+//!
 //! The binary is a thin wrapper over [`main_with`]; tests and benches can call
 //! [`parse_args`], [`simulate`] or [`main_with`] directly.
 
 #![warn(missing_docs)]
 
+pub mod batch;
 pub mod ccc;
 pub mod cli;
 pub mod columns;
 pub mod run;
 pub mod scenarios;
 
+pub use batch::{run_jobs, Progress};
 pub use ccc::{CccScenario, CccSummary, End};
-pub use cli::{parse_args, Command, Output, RunOptions, UsageError, HINT, USAGE};
+pub use cli::{parse_args, BatchOptions, Command, Output, RunOptions, UsageError, HINT, USAGE};
 pub use columns::{Column, Layout};
-pub use run::{simulate, step_count, MaxReaction, MeanSpeed, RunError, Summary, MAX_STEPS};
+pub use run::{simulate, step_count, MaxReaction, MeanSpeed, RunError, Steps, Summary, MAX_STEPS};
 pub use scenarios::ScenarioId;
 
 use std::ffi::OsString;
 use std::fs::File;
 use std::io::{self, BufWriter, Write};
+use std::path::Path;
 
 /// Exit code of a successful command.
 pub const EXIT_OK: u8 = 0;
@@ -58,6 +72,7 @@ where
             Err(e) => report_write(stderr, "stdout", &e),
         },
         Ok(Command::Run(opts)) => execute(&opts, stdout, stderr),
+        Ok(Command::Batch(opts)) => batch::execute(&opts, stdout, stderr),
         Err(e) => {
             let _ = writeln!(stderr, "host-sim: {e}\n{HINT}");
             EXIT_USAGE
@@ -110,13 +125,7 @@ pub fn execute(opts: &RunOptions, stdout: &mut dyn Write, stderr: &mut dyn Write
     }
     let result = match &opts.out {
         Output::Stdout => dispatch(opts, stdout, "stdout").map(|s| (s, false)),
-        Output::File(path) => {
-            let target = path.display().to_string();
-            match File::create(path) {
-                Ok(f) => dispatch(opts, &mut BufWriter::new(f), &target).map(|s| (s, true)),
-                Err(error) => Err(RunError::Write { target, error }),
-            }
-        }
+        Output::File(path) => run_to_file(opts, path).map(|s| (s, true)),
     };
     match result {
         Ok((summary, to_stdout)) => {
@@ -147,6 +156,15 @@ pub(crate) fn report_run_error(e: RunError, stderr: &mut dyn Write) -> u8 {
             }
             e.exit_code()
         }
+    }
+}
+
+/// Runs the mechanism scenario of `opts` with its CSV to the file `path`.
+pub(crate) fn run_to_file(opts: &RunOptions, path: &Path) -> Result<Summary, RunError> {
+    let target = path.display().to_string();
+    match File::create(path) {
+        Ok(f) => dispatch(opts, &mut BufWriter::new(f), &target),
+        Err(error) => Err(RunError::Write { target, error }),
     }
 }
 

@@ -244,6 +244,68 @@ impl fmt::Display for Summary {
     }
 }
 
+/// `"f32"` or `"f64"`: the name of the scalar `T` in summaries and messages.
+pub(crate) fn precision<T: Real>() -> &'static str {
+    if core::mem::size_of::<T>() == 4 {
+        "f32"
+    } else {
+        "f64"
+    }
+}
+
+/// A run's fixed steps: its options' `--h` and `--t-end`, or else its scenario's.
+///
+/// [`Steps::of`] makes the checks every run makes before its first step, so that
+/// `host-sim batch` can reject a bad line before anything runs, with the same message
+/// `host-sim run` would give.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Steps {
+    /// Step size as given (or the scenario's), s, in `f64`.
+    pub h: f64,
+    /// Simulated time, s.
+    pub t_end: f64,
+    /// Number of steps ([`step_count`]).
+    pub n: u64,
+}
+
+impl Steps {
+    /// The steps of `opts` in scalar `T`, and the step size as a `T`. Errors: `--h` is
+    /// not a positive `T` (an `f32` underflow), or more than [`MAX_STEPS`] steps
+    /// ([`RunError::Usage`]); the scenario's defaults cannot be built
+    /// ([`RunError::Setup`]).
+    pub fn of<T: Real>(opts: &RunOptions) -> Result<(Steps, T), RunError> {
+        // The defaults as f64 (the f32 scenario's 0.01 s step is 0.0099999998 s).
+        let (h64, t_end) = match (opts.h, opts.t_end) {
+            (Some(h), Some(t)) => (h, t),
+            (h, t) => {
+                let (dh, dt) = opts.scenario.default_steps().map_err(|e| {
+                    RunError::Setup(format!("cannot build {}: {e}", opts.scenario.name()))
+                })?;
+                (h.unwrap_or(dh), t.unwrap_or(dt))
+            }
+        };
+        let h = T::c(h64);
+        if !(h.finite() && h > T::zero()) {
+            return Err(RunError::Usage(UsageError(format!(
+                "--h: {h64} s is not a positive {}",
+                precision::<T>()
+            ))));
+        }
+        // Counted with the f64 step as given (an f32 step of 0.01 is 0.0099999998).
+        let n = step_count(h64, t_end).map_err(RunError::Usage)?;
+        Ok((Steps { h: h64, t_end, n }, h))
+    }
+
+    /// The steps of `opts` in its own precision (`--f32` or `f64`).
+    pub fn check(opts: &RunOptions) -> Result<Steps, RunError> {
+        if opts.f32 {
+            Steps::of::<f32>(opts).map(|(s, _)| s)
+        } else {
+            Steps::of::<f64>(opts).map(|(s, _)| s)
+        }
+    }
+}
+
 /// Number of fixed steps of size `h` to reach `t_end`: `t_end / h` when that is an
 /// integer to 1e-9 relative, else rounded up; at least 1.
 pub fn step_count(h: f64, t_end: f64) -> Result<u64, UsageError> {
@@ -270,11 +332,7 @@ pub fn simulate<T: Real>(
     csv: &mut dyn Write,
     target: &str,
 ) -> Result<Summary, RunError> {
-    let precision = if core::mem::size_of::<T>() == 4 {
-        "f32"
-    } else {
-        "f64"
-    };
+    let precision = precision::<T>();
     let not_a_mechanism = || {
         RunError::Setup(format!(
             "{} is a converter scenario: run it with host_sim::ccc::simulate",
@@ -286,28 +344,7 @@ pub fn simulate<T: Real>(
         .build::<T>()
         .ok_or_else(not_a_mechanism)?
         .map_err(|e| RunError::Setup(format!("cannot build {}: {e}", opts.scenario.name())))?;
-    // The defaults as f64 (the f32 scenario's 0.01 s step is 0.0099999998 s).
-    let (h64, t_end) = match (opts.h, opts.t_end) {
-        (Some(h), Some(t)) => (h, t),
-        (h, t) => {
-            let s64 = opts
-                .scenario
-                .build::<f64>()
-                .ok_or_else(not_a_mechanism)?
-                .map_err(|e| {
-                    RunError::Setup(format!("cannot build {}: {e}", opts.scenario.name()))
-                })?;
-            (h.unwrap_or(s64.h), t.unwrap_or(s64.t_end))
-        }
-    };
-    let h = T::c(h64);
-    if !(h.finite() && h > T::zero()) {
-        return Err(RunError::Usage(UsageError(format!(
-            "--h: {h64} s is not a positive {precision}"
-        ))));
-    }
-    // Counted with the f64 step as given (an f32 step of 0.01 is 0.0099999998).
-    let n = step_count(h64, t_end).map_err(RunError::Usage)?;
+    let (Steps { n, .. }, h) = Steps::of::<T>(opts)?;
     let every = opts.every.max(1);
     let mut sim = scenario
         .simulation_with_step(h)

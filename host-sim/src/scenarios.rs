@@ -89,6 +89,19 @@ impl ScenarioId {
         }
     }
 
+    /// The scenario's own step size and simulated time `(h, t_end)`, s; an error if a
+    /// mechanism scenario cannot build.
+    pub fn default_steps(self) -> Result<(f64, f64), ModelError> {
+        let mechanism = |s: Scenario<f64>| (s.h, s.t_end);
+        let converter = |c: CccScenario| (c.h, c.t_end);
+        match self {
+            ScenarioId::SliderCrank => slider_crank().map(mechanism),
+            ScenarioId::FiveBar => five_bar().map(mechanism),
+            ScenarioId::CccS1 => Ok(converter(CccScenario::s1())),
+            ScenarioId::CccS2 => Ok(converter(CccScenario::s2())),
+        }
+    }
+
     /// The converter scenario's default settings; `None` for a mechanism scenario.
     pub fn converter(self) -> Option<CccScenario> {
         match self {
