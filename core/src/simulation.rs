@@ -134,6 +134,12 @@ impl<T: Real> Simulation<T> {
     pub fn step(&mut self) -> Result<(), StepError> {
         let saved: [[T; MAX_GROUP_VARS]; MAX_GROUPS] = core::array::from_fn(|k| self.ws.group[k].x);
         let t_next = T::c((self.steps + 1) as f64) * self.h;
+        if !t_next.finite() {
+            return Err(StepError::NonFinite {
+                time: self.t.to_f64(),
+                what: "the time n·h of the next step",
+            });
+        }
         let h = t_next - self.t;
         let mut sys = Equations {
             model: &self.model,
