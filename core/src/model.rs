@@ -335,19 +335,12 @@ impl<T: Real> ModelBuilder<T> {
         Ok(self.m.links.len() as u8)
     }
 
-    /// Appends a group to the motion-transmission sequence. Every value the group holds
-    /// must be finite: its angle offsets and guesses as given, and what its constructor
-    /// derives from the links' points (lengths, directions: a point at 1e200 m is finite
-    /// but its squared length is not).
+    /// Appends a group to the motion-transmission sequence. [`ModelBuilder::build`]
+    /// checks that every value the group holds is finite: its angle offsets and guesses
+    /// as given, and what its constructor derives from the links' points (lengths,
+    /// directions: a point at 1e200 m is finite but its squared length is not).
     pub fn group(&mut self, spec: &impl GroupSpec<T>) -> Result<u8, ModelError> {
         let g = spec.build(&self.m)?;
-        if let Err(what) = group_values_finite(&g) {
-            return Err(ModelError::GroupNonFinite {
-                group: self.m.groups.len().min(u8::MAX as usize) as u8,
-                kind: g.kind,
-                what,
-            });
-        }
         self.m
             .groups
             .push(g)
@@ -429,6 +422,17 @@ impl<T: Real> ModelBuilder<T> {
                 return Err(ModelError::Overflow(
                     "a link's weight times the mechanism's size (its potential energy)",
                 ));
+            }
+        }
+        // After the points: a group's values derive from them, and a non-finite point
+        // is named as such above.
+        for (k, g) in m.groups.iter().enumerate() {
+            if let Err(what) = group_values_finite(g) {
+                return Err(ModelError::GroupNonFinite {
+                    group: k as u8,
+                    kind: g.kind,
+                    what,
+                });
             }
         }
         // Newton stops at 64 ulps of the mechanism's size: 1.4e-14 m per metre in f64.
