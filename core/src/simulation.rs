@@ -113,6 +113,7 @@ impl<T: Real> Simulation<T> {
         let mut ws = Workspace::new();
         assemble(&model, &mut ws, q0).map_err(SetupError::Initial)?;
         forward(&model, &mut ws, T::zero(), q0, qd0).map_err(SetupError::Initial)?;
+        check_energy(&model, &ws, 0.0).map_err(SetupError::Initial)?;
         Ok(Simulation {
             model,
             ws,
@@ -125,7 +126,9 @@ impl<T: Real> Simulation<T> {
     }
 
     /// One DP5 step of size `h`. On error the state, the workspace's configuration and
-    /// the integrator are those of the last good step.
+    /// the integrator are those of the last good step. A step whose end state overflows
+    /// the energies (a finite speed whose `½Iω²` does not fit the scalar) is refused
+    /// too: the energies are outputs, and such a state has run away.
     ///
     /// Time is `n·h` after `n` steps, not a running sum (which drifts by a few ulps a
     /// step: 1.3e-4 s over 1000 steps in `f32`): the step taken is `(n+1)h - t`, exact
@@ -141,18 +144,34 @@ impl<T: Real> Simulation<T> {
             });
         }
         let h = t_next - self.t;
+        let (t0, y0) = (self.t, self.y);
         let mut sys = Equations {
             model: &self.model,
             ws: &mut self.ws,
         };
-        match self.dp5.step(&mut sys, &mut self.t, &mut self.y, h) {
-            Ok(_) => {
-                self.steps += 1;
+        let mut accepted = false;
+        let result = self
+            .dp5
+            .step(&mut sys, &mut self.t, &mut self.y, h)
+            .and_then(|_| {
+                accepted = true;
                 // The last stage was evaluated at the new state (FSAL): finish it.
                 finish_accelerations(&self.model, &mut self.ws);
+                check_energy(&self.model, &self.ws, t_next.to_f64())
+            });
+        match result {
+            Ok(()) => {
+                self.steps += 1;
                 Ok(())
             }
             Err(e) => {
+                if accepted {
+                    // The integrator had taken the step (its FSAL stage is the new
+                    // state's): take it back.
+                    self.t = t0;
+                    self.y = y0;
+                    self.dp5.invalidate();
+                }
                 for (gd, x) in self.ws.group.iter_mut().zip(saved.iter()) {
                     gd.x = *x;
                 }
@@ -211,5 +230,19 @@ impl<T: Real> Simulation<T> {
     pub fn kinetostatics(&mut self) -> Result<&Workspace<T>, StepError> {
         reactions(&self.model, &mut self.ws, self.t.to_f64())?;
         Ok(&self.ws)
+    }
+}
+
+/// The energies at the workspace's state are finite, or the error that says they are not
+/// (at time `time`, s).
+fn check_energy<T: Real>(model: &Model<T>, ws: &Workspace<T>, time: f64) -> Result<(), StepError> {
+    let e = energy(model, ws);
+    if e.kinetic.finite() && e.potential.finite() {
+        Ok(())
+    } else {
+        Err(StepError::NonFinite {
+            time,
+            what: "the kinetic or potential energy (the state overflows it)",
+        })
     }
 }

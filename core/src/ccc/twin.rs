@@ -455,6 +455,7 @@ impl<T: Real> Twin<T> {
         }
         twin.y = w.y;
         let audit = twin.audit_of(&twin.slot.links(&twin.params), &w);
+        audit_finite(&audit, w.t)?;
         twin.commit(&w, audit);
         let (k, u) = (twin.audit.kinetic, twin.audit.potential);
         twin.audit.initial = k + u;
@@ -540,6 +541,7 @@ impl<T: Real> Twin<T> {
     fn check_energy(&self, w: &Work<T>) -> Result<Audit<T>, TwinError> {
         let links = self.slot.links(&self.params);
         let a = self.audit_of(&links, w);
+        audit_finite(&a, w.t)?;
         let jump = a.residual() - self.audit.residual();
         let scale = T::one() + a.motor_work.abs() + a.kinetic.abs() + a.potential.abs();
         if jump.abs() <= self.settings.energy_tol * scale {
@@ -1593,6 +1595,30 @@ fn same_inputs<T: Real>(a: &Inputs<T>, b: &Inputs<T>) -> bool {
         _ => false,
     };
     motor && same_bits(a.load, b.load)
+}
+
+/// The audit's terms are finite, or the error that says they are not. The works are
+/// integrated with the motion but not checked by its evaluations, and an energy can
+/// overflow at finite speeds (`½ J_s ω²` with a huge J_s): past the scalar's range the
+/// balance test would compare infinities and pass.
+fn audit_finite<T: Real>(a: &Audit<T>, t: T) -> Result<(), TwinError> {
+    let terms = [
+        a.motor_work,
+        a.load_work,
+        a.impact_loss,
+        a.kinetic,
+        a.potential,
+        a.initial,
+        a.residual(),
+    ];
+    if terms.iter().all(|x| x.finite()) {
+        Ok(())
+    } else {
+        Err(TwinError::Step(StepError::NonFinite {
+            time: t.to_f64(),
+            what: "the energy audit (a work or an energy overflows the scalar)",
+        }))
+    }
 }
 
 fn check_inputs<T: Real>(inputs: &Inputs<T>) -> Result<(), TwinError> {
