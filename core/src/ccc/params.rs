@@ -148,10 +148,10 @@ impl<T: Real> CccParams<T> {
             }
         };
         for (p, what) in [
-            (self.a, "converter: crank pivot A"),
-            (self.f, "converter: swing-link pivot F"),
-            (self.h, "converter: output shaft H"),
-            (self.gravity, "converter: gravity"),
+            (self.a, "crank pivot A"),
+            (self.f, "swing-link pivot F"),
+            (self.h, "output shaft H"),
+            (self.gravity, "gravity"),
         ] {
             fin(p.x, what)?;
             fin(p.y, what)?;
@@ -171,11 +171,11 @@ impl<T: Real> CccParams<T> {
             }
         }
         for (x, what) in [
-            (self.rocker_d, "converter: D on the rocker"),
-            (self.mass, "converter: oscillating mass"),
-            (self.mass_inertia, "converter: oscillating mass inertia"),
-            (self.mass_at, "converter: oscillating mass position"),
-            (self.shaft_inertia, "converter: shaft inertia"),
+            (self.rocker_d, "D on the rocker"),
+            (self.mass, "oscillating mass"),
+            (self.mass_inertia, "oscillating mass inertia"),
+            (self.mass_at, "oscillating mass position"),
+            (self.shaft_inertia, "shaft inertia"),
         ] {
             fin(x, what)?;
             if x < T::zero() {
@@ -183,7 +183,7 @@ impl<T: Real> CccParams<T> {
             }
         }
         if !(self.rocker_d > T::zero()) {
-            return Err(ModelError::NotPositive("converter: D on the rocker"));
+            return Err(ModelError::NotPositive("D on the rocker"));
         }
         // Every joint lies within the pivots' spread plus the sum of the lengths.
         let mut size = self.rocker_d + self.mass_at;
@@ -195,21 +195,19 @@ impl<T: Real> CccParams<T> {
         }
         let size = T::c(2.0) * size;
         if !(size * size).finite() {
-            return Err(ModelError::Overflow("converter: its size squared"));
+            return Err(ModelError::Overflow("its size squared"));
         }
         let g = self.gravity.x.abs() + self.gravity.y.abs();
         let total_mass = self.links.iter().fold(self.mass, |m, b| m + b.mass);
         if !(total_mass * g * size + total_mass * size * size).finite() {
-            return Err(ModelError::Overflow(
-                "converter: its masses times its size (energies)",
-            ));
+            return Err(ModelError::Overflow("its masses times its size (energies)"));
         }
         let inertias = self
             .links
             .iter()
             .fold(self.mass_inertia + self.shaft_inertia, |i, b| i + b.inertia);
         if !inertias.finite() {
-            return Err(ModelError::Overflow("converter: the sum of its inertias"));
+            return Err(ModelError::Overflow("the sum of its inertias"));
         }
         Ok(())
     }
@@ -218,44 +216,44 @@ impl<T: Real> CccParams<T> {
 /// The names of each link's length, mass and inertia in errors (SPEC 3's numbering).
 const LINK_FIELDS: [[&str; 3]; 8] = [
     [
-        "converter: link 1 (crank) length",
-        "converter: link 1 (crank) mass",
-        "converter: link 1 (crank) inertia",
+        "link 1 (crank) length",
+        "link 1 (crank) mass",
+        "link 1 (crank) inertia",
     ],
     [
-        "converter: link 2 (coupler) length",
-        "converter: link 2 (coupler) mass",
-        "converter: link 2 (coupler) inertia",
+        "link 2 (coupler) length",
+        "link 2 (coupler) mass",
+        "link 2 (coupler) inertia",
     ],
     [
-        "converter: link 3 (rocker) length",
-        "converter: link 3 (rocker) mass",
-        "converter: link 3 (rocker) inertia",
+        "link 3 (rocker) length",
+        "link 3 (rocker) mass",
+        "link 3 (rocker) inertia",
     ],
     [
-        "converter: link 4 (swing link) length",
-        "converter: link 4 (swing link) mass",
-        "converter: link 4 (swing link) inertia",
+        "link 4 (swing link) length",
+        "link 4 (swing link) mass",
+        "link 4 (swing link) inertia",
     ],
     [
-        "converter: link 5 (rod to G) length",
-        "converter: link 5 (rod to G) mass",
-        "converter: link 5 (rod to G) inertia",
+        "link 5 (rod to G) length",
+        "link 5 (rod to G) mass",
+        "link 5 (rod to G) inertia",
     ],
     [
-        "converter: link 6 (lever 6) length",
-        "converter: link 6 (lever 6) mass",
-        "converter: link 6 (lever 6) inertia",
+        "link 6 (lever 6) length",
+        "link 6 (lever 6) mass",
+        "link 6 (lever 6) inertia",
     ],
     [
-        "converter: link 7 (rod to I) length",
-        "converter: link 7 (rod to I) mass",
-        "converter: link 7 (rod to I) inertia",
+        "link 7 (rod to I) length",
+        "link 7 (rod to I) mass",
+        "link 7 (rod to I) inertia",
     ],
     [
-        "converter: link 8 (lever 8) length",
-        "converter: link 8 (lever 8) mass",
-        "converter: link 8 (lever 8) inertia",
+        "link 8 (lever 8) length",
+        "link 8 (lever 8) mass",
+        "link 8 (lever 8) inertia",
     ],
 ];
 
