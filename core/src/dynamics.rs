@@ -279,8 +279,13 @@ pub fn solve_accelerations<T: Real>(
             }
         }
     }
+    // The mass matrix passed its definiteness test: accelerations that overflow come
+    // from the applied forces (a torque of 1e308 N·m), not from a singular configuration.
     if qdd.iter().any(|v| !v.finite()) {
-        return Err(singular);
+        return Err(StepError::NonFinite {
+            time,
+            what: "generalized accelerations (the applied forces overflow them)",
+        });
     }
     ws.qdd = qdd;
     ws.evaluations += 1;

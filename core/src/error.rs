@@ -60,6 +60,19 @@ pub enum ModelError {
     Coordinates(&'static str),
     /// A geometric parameter makes a group degenerate (e.g. a zero-length arm).
     Degenerate(&'static str),
+    /// Values that are finite but whose products overflow the scalar: the step squares
+    /// distances and multiplies masses by gravity and heights.
+    Overflow(&'static str),
+    /// A value of a group (an angle offset, a guess, or a length or direction derived
+    /// from its links' points, which can overflow) is NaN or infinite.
+    GroupNonFinite {
+        /// Position of the group in the sequence.
+        group: u8,
+        /// Its kind.
+        kind: GroupKind,
+        /// Which value.
+        what: &'static str,
+    },
 }
 
 impl fmt::Display for ModelError {
@@ -76,6 +89,10 @@ impl fmt::Display for ModelError {
             }
             ModelError::Coordinates(w) => write!(f, "generalized coordinates: {w}"),
             ModelError::Degenerate(w) => write!(f, "degenerate geometry: {w}"),
+            ModelError::Overflow(w) => write!(f, "{w} overflows the scalar type"),
+            ModelError::GroupNonFinite { group, kind, what } => {
+                write!(f, "group {group} ({}): {what} is not finite", kind.symbol())
+            }
         }
     }
 }

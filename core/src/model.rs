@@ -13,8 +13,8 @@ use crate::error::ModelError;
 use crate::motor::Motor;
 use crate::scalar::{Real, Vec2};
 use crate::structomat::{
-    Base, DyadRrr, DyadRrt, DyadRtr, DyadRtt, DyadTrt, Group, GroupKind, Length, MotorR, MotorT,
-    PointRef, Term, TriadRrRrRr,
+    Base, DyadRrr, DyadRrt, DyadRtr, DyadRtt, DyadTrt, Group, GroupKind, JointKind, Length, MotorR,
+    MotorT, PointRef, Term, TriadRrRrRr,
 };
 use core::fmt;
 use core::marker::PhantomData;
@@ -438,7 +438,10 @@ impl<T: Real, M: DerefMut<Target = Model<T>>> ModelBuilder<T, M> {
         Ok(self.m.links.len() as u8)
     }
 
-    /// Appends a group to the motion-transmission sequence.
+    /// Appends a group to the motion-transmission sequence. [`ModelBuilder::build`]
+    /// checks that every value the group holds is finite: its angle offsets and guesses
+    /// as given, and what its constructor derives from the links' points (lengths,
+    /// directions: a point at 1e200 m is finite but its squared length is not).
     pub fn group(&mut self, spec: &impl GroupSpec<T>) -> Result<u8, ModelError> {
         let g = spec.build(&self.m)?;
         self.m
@@ -501,6 +504,42 @@ fn validate<T: Real>(m: &mut Model<T>) -> Result<(), ModelError> {
             scale = scale.max(p.x.abs()).max(p.y.abs());
         }
     }
+    // The step squares distances (closed forms, Newton's residual, speeds) and
+    // multiplies masses by gravity and heights (weights, potential energy): a
+    // description finite in itself can still overflow there (a point at 1e200 m; in
+    // f32 past 1.8e19 m). Twice the largest coordinate bounds every distance.
+    let cogs = m
+        .links
+        .iter()
+        .fold(T::zero(), |a, l| a.max(l.cog.x.abs()).max(l.cog.y.abs()));
+    let size = T::c(2.0) * scale.max(cogs);
+    if !(size * size).finite() {
+        return Err(ModelError::Overflow("the mechanism's size squared"));
+    }
+    let g = m.gravity.x.abs().max(m.gravity.y.abs());
+    for l in m.links.iter() {
+        if !(l.mass * size * size + l.inertia).finite() {
+            return Err(ModelError::Overflow(
+                "a link's moment of inertia about a point of the mechanism",
+            ));
+        }
+        if !(l.mass * g * size).finite() {
+            return Err(ModelError::Overflow(
+                "a link's weight times the mechanism's size (its potential energy)",
+            ));
+        }
+    }
+    // After the points: a group's values derive from them, and a non-finite point
+    // is named as such above.
+    for (k, g) in m.groups.iter().enumerate() {
+        if let Err(what) = group_values_finite(g) {
+            return Err(ModelError::GroupNonFinite {
+                group: k as u8,
+                kind: g.kind,
+                what,
+            });
+        }
+    }
     // Newton stops at 64 ulps of the mechanism's size: 1.4e-14 m per metre in f64.
     m.newton_tol = T::c(64.0) * T::EPS * scale;
     check_sequence(m)?;
@@ -534,6 +573,50 @@ fn validate<T: Real>(m: &mut Model<T>) -> Result<(), ModelError> {
         finite2(&l.point, "load point")?;
         finite2(&l.force, "load force")?;
         finite(l.moment, "load moment")?;
+        let size = size.max(T::c(2.0) * l.point.x.abs().max(l.point.y.abs()));
+        if !((l.force.x.abs() + l.force.y.abs()) * size + l.moment.abs()).finite() {
+            return Err(ModelError::Overflow(
+                "a load's moment about a point of the mechanism",
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Every value of a built group is finite, or the name of the first that is not.
+fn group_values_finite<T: Real>(g: &Group<T>) -> Result<(), &'static str> {
+    let ok = |x: T, what| if x.finite() { Ok(()) } else { Err(what) };
+    let ok2 = |v: &Vec2<T>, what| ok(v.x, what).and_then(|()| ok(v.y, what));
+    for x in g.guess.iter() {
+        ok(*x, "a guess")?;
+    }
+    for x in g.consts.iter() {
+        ok(*x, "a length or angle of its closed form")?;
+    }
+    for c in g.chains.iter() {
+        for t in c.terms.iter() {
+            match t {
+                Term::Arm { angle, v } => {
+                    ok(angle.offset, "an angle offset")?;
+                    ok2(v, "an arm (a link's joint-to-joint vector)")?;
+                }
+                Term::Slide { angle, dir, .. } => {
+                    ok(angle.offset, "a guide angle")?;
+                    ok2(dir, "a guide direction")?;
+                }
+            }
+        }
+    }
+    for p in g.placements.iter() {
+        ok(p.angle.offset, "an angle offset")?;
+        ok2(&p.local, "a link point")?;
+    }
+    for j in g.joints.iter() {
+        ok2(&j.pi, "a joint point")?;
+        ok2(&j.pj, "a joint point")?;
+        if let JointKind::Prismatic { dir } | JointKind::DriveForce { dir } = j.kind {
+            ok2(&dir, "a guide direction")?;
+        }
     }
     Ok(())
 }

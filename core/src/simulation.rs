@@ -116,6 +116,7 @@ impl<T: Real> Simulation<T> {
         let mut ws = Workspace::new();
         assemble(&model, &mut ws, q0).map_err(SetupError::Initial)?;
         forward(&model, &mut ws, T::zero(), q0, qd0).map_err(SetupError::Initial)?;
+        check_outputs(&model, &ws, 0.0).map_err(SetupError::Initial)?;
         Ok(Simulation {
             model,
             ws,
@@ -128,7 +129,9 @@ impl<T: Real> Simulation<T> {
     }
 
     /// One DP5 step of size `h`. On error the state, the workspace's configuration and
-    /// the integrator are those of the last good step.
+    /// the integrator are those of the last good step. A step whose end state has a
+    /// non-finite output (a link's state, an energy: a finite speed whose `½Iω²` does
+    /// not fit the scalar) is refused too: such a state has run away.
     ///
     /// Time is `n·h` after `n` steps, not a running sum (which drifts by a few ulps a
     /// step: 1.3e-4 s over 1000 steps in `f32`): the step taken is `(n+1)h - t`, exact
@@ -137,19 +140,41 @@ impl<T: Real> Simulation<T> {
     pub fn step(&mut self) -> Result<(), StepError> {
         let saved: [[T; MAX_GROUP_VARS]; MAX_GROUPS] = core::array::from_fn(|k| self.ws.group[k].x);
         let t_next = T::c((self.steps + 1) as f64) * self.h;
+        if !t_next.finite() {
+            return Err(StepError::NonFinite {
+                time: self.t.to_f64(),
+                what: "the time n·h of the next step",
+            });
+        }
         let h = t_next - self.t;
+        let (t0, y0) = (self.t, self.y);
         let mut sys = Equations {
             model: &self.model,
             ws: &mut self.ws,
         };
-        match self.dp5.step(&mut sys, &mut self.t, &mut self.y, h) {
-            Ok(_) => {
-                self.steps += 1;
+        let mut accepted = false;
+        let result = self
+            .dp5
+            .step(&mut sys, &mut self.t, &mut self.y, h)
+            .and_then(|_| {
+                accepted = true;
                 // The last stage was evaluated at the new state (FSAL): finish it.
                 finish_accelerations(&self.model, &mut self.ws);
+                check_outputs(&self.model, &self.ws, t_next.to_f64())
+            });
+        match result {
+            Ok(()) => {
+                self.steps += 1;
                 Ok(())
             }
             Err(e) => {
+                if accepted {
+                    // The integrator had taken the step (its FSAL stage is the new
+                    // state's): take it back.
+                    self.t = t0;
+                    self.y = y0;
+                    self.dp5.invalidate();
+                }
                 for (gd, x) in self.ws.group.iter_mut().zip(saved.iter()) {
                     gd.x = *x;
                 }
@@ -213,4 +238,29 @@ impl<T: Real> Simulation<T> {
         reactions(&self.model, &mut self.ws, self.t.to_f64())?;
         Ok(&self.ws)
     }
+}
+
+/// The outputs at the workspace's state (every link's angle, position, speeds and
+/// accelerations, the energies) are finite, or the error that names the first that is
+/// not (at time `time`, s). The evaluation checks `q`, `q̇`, `q̈` and the mass matrix;
+/// finite values can still overflow past them: an angle offset of -1e300 rad plus
+/// q = -f64::MAX, accelerations `V q̈` of a q̈ near f64::MAX, `½Iω²` of a huge inertia.
+fn check_outputs<T: Real>(model: &Model<T>, ws: &Workspace<T>, time: f64) -> Result<(), StepError> {
+    let fail = |what| Err(StepError::NonFinite { time, what });
+    for b in ws.body.iter().skip(1).take(model.n_links()) {
+        if !(b.theta.finite() && b.o.x.finite() && b.o.y.finite()) {
+            return fail("a link's angle or position");
+        }
+        if !(b.omega.finite() && b.v.x.finite() && b.v.y.finite()) {
+            return fail("a link's speed");
+        }
+        if !(b.alpha.finite() && b.a.x.finite() && b.a.y.finite()) {
+            return fail("a link's acceleration (the applied forces overflow it)");
+        }
+    }
+    let e = energy(model, ws);
+    if !(e.kinetic.finite() && e.potential.finite()) {
+        return fail("the kinetic or potential energy (the state overflows it)");
+    }
+    Ok(())
 }

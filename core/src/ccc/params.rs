@@ -136,7 +136,9 @@ impl<T: Real> CccParams<T> {
     }
 
     /// Checks every value: finite, lengths and masses positive, inertias non-negative,
-    /// D and the mass on the rocker.
+    /// D and the mass on the rocker; and that the converter's size, squared, and its
+    /// weights times its size do not overflow the scalar (the assembly squares lengths,
+    /// the audit multiplies weights by heights). Errors name the link (SPEC numbering).
     pub fn validate(&self) -> Result<(), ModelError> {
         let fin = |x: T, what| {
             if x.finite() {
@@ -145,27 +147,35 @@ impl<T: Real> CccParams<T> {
                 Err(ModelError::NonFinite(what))
             }
         };
-        for p in [self.a, self.f, self.h, self.gravity] {
-            fin(p.x, "converter: point or gravity")?;
-            fin(p.y, "converter: point or gravity")?;
+        for (p, what) in [
+            (self.a, "crank pivot A"),
+            (self.f, "swing-link pivot F"),
+            (self.h, "output shaft H"),
+            (self.gravity, "gravity"),
+        ] {
+            fin(p.x, what)?;
+            fin(p.y, what)?;
         }
-        for b in self.links.iter() {
-            fin(b.length, "converter: link length")?;
-            fin(b.mass, "converter: link mass")?;
-            fin(b.inertia, "converter: link inertia")?;
+        for (b, [length, mass, inertia]) in self.links.iter().zip(LINK_FIELDS.iter()) {
+            fin(b.length, length)?;
+            fin(b.mass, mass)?;
+            fin(b.inertia, inertia)?;
             if !(b.length > T::zero()) {
-                return Err(ModelError::NotPositive("converter: link length"));
+                return Err(ModelError::NotPositive(length));
             }
-            if !(b.mass > T::zero()) || b.inertia < T::zero() {
-                return Err(ModelError::Negative("converter: link mass or inertia"));
+            if !(b.mass > T::zero()) {
+                return Err(ModelError::NotPositive(mass));
+            }
+            if b.inertia < T::zero() {
+                return Err(ModelError::Negative(inertia));
             }
         }
         for (x, what) in [
-            (self.rocker_d, "converter: D on the rocker"),
-            (self.mass, "converter: oscillating mass"),
-            (self.mass_inertia, "converter: oscillating mass inertia"),
-            (self.mass_at, "converter: oscillating mass position"),
-            (self.shaft_inertia, "converter: shaft inertia"),
+            (self.rocker_d, "D on the rocker"),
+            (self.mass, "oscillating mass"),
+            (self.mass_inertia, "oscillating mass inertia"),
+            (self.mass_at, "oscillating mass position"),
+            (self.shaft_inertia, "shaft inertia"),
         ] {
             fin(x, what)?;
             if x < T::zero() {
@@ -173,11 +183,79 @@ impl<T: Real> CccParams<T> {
             }
         }
         if !(self.rocker_d > T::zero()) {
-            return Err(ModelError::NotPositive("converter: D on the rocker"));
+            return Err(ModelError::NotPositive("D on the rocker"));
+        }
+        // Every joint lies within the pivots' spread plus the sum of the lengths.
+        let mut size = self.rocker_d + self.mass_at;
+        for p in [self.a, self.f, self.h] {
+            size += p.x.abs() + p.y.abs();
+        }
+        for b in self.links.iter() {
+            size += b.length;
+        }
+        let size = T::c(2.0) * size;
+        if !(size * size).finite() {
+            return Err(ModelError::Overflow("its size squared"));
+        }
+        let g = self.gravity.x.abs() + self.gravity.y.abs();
+        let total_mass = self.links.iter().fold(self.mass, |m, b| m + b.mass);
+        if !(total_mass * g * size + total_mass * size * size).finite() {
+            return Err(ModelError::Overflow("its masses times its size (energies)"));
+        }
+        let inertias = self
+            .links
+            .iter()
+            .fold(self.mass_inertia + self.shaft_inertia, |i, b| i + b.inertia);
+        if !inertias.finite() {
+            return Err(ModelError::Overflow("the sum of its inertias"));
         }
         Ok(())
     }
 }
+
+/// The names of each link's length, mass and inertia in errors (SPEC 3's numbering).
+const LINK_FIELDS: [[&str; 3]; 8] = [
+    [
+        "link 1 (crank) length",
+        "link 1 (crank) mass",
+        "link 1 (crank) inertia",
+    ],
+    [
+        "link 2 (coupler) length",
+        "link 2 (coupler) mass",
+        "link 2 (coupler) inertia",
+    ],
+    [
+        "link 3 (rocker) length",
+        "link 3 (rocker) mass",
+        "link 3 (rocker) inertia",
+    ],
+    [
+        "link 4 (swing link) length",
+        "link 4 (swing link) mass",
+        "link 4 (swing link) inertia",
+    ],
+    [
+        "link 5 (rod to G) length",
+        "link 5 (rod to G) mass",
+        "link 5 (rod to G) inertia",
+    ],
+    [
+        "link 6 (lever 6) length",
+        "link 6 (lever 6) mass",
+        "link 6 (lever 6) inertia",
+    ],
+    [
+        "link 7 (rod to I) length",
+        "link 7 (rod to I) mass",
+        "link 7 (rod to I) inertia",
+    ],
+    [
+        "link 8 (lever 8) length",
+        "link 8 (lever 8) mass",
+        "link 8 (lever 8) inertia",
+    ],
+];
 
 /// The intersection of circle(`p`, `rp`) and circle(`q`, `rq`) on side `side` of p→q;
 /// `None` if they do not meet.

@@ -373,6 +373,28 @@ impl<T: Real> Twin<T> {
         {
             return Err(TwinError::Setting("switch_below must be in (0, 1)"));
         }
+        if !(settings.energy_tol.finite() && settings.energy_tol > T::zero()) {
+            return Err(TwinError::Setting("energy_tol must be positive and finite"));
+        }
+        for (x, what) in [
+            (settings.crank, "the initial crank angle must be finite"),
+            (
+                settings.swing,
+                "the initial swing-link angle must be finite",
+            ),
+            (
+                settings.crank_speed,
+                "the initial crank speed must be finite",
+            ),
+            (
+                settings.swing_speed,
+                "the initial swing-link speed must be finite",
+            ),
+        ] {
+            if !x.finite() {
+                return Err(TwinError::Setting(what));
+            }
+        }
         check_inputs(&inputs)?;
         let pose =
             initial_pose(&params, settings.crank, settings.swing).ok_or(TwinError::Setting(
@@ -434,6 +456,7 @@ impl<T: Real> Twin<T> {
         }
         twin.y = w.y;
         let audit = twin.audit_of(&twin.slot.links(&twin.params), &w);
+        audit_finite(&audit, w.t)?;
         twin.commit(&w, audit);
         let (k, u) = (twin.audit.kinetic, twin.audit.potential);
         twin.audit.initial = k + u;
@@ -441,11 +464,19 @@ impl<T: Real> Twin<T> {
     }
 
     /// One step of `h` under `inputs` (held over the step). On error the twin keeps the
-    /// state of the last good step.
+    /// state of the last good step, including what it reports of that step (events,
+    /// coordinate switches, the candidates of the last mode choice).
     pub fn step(&mut self, inputs: &Inputs<T>) -> Result<(), TwinError> {
         check_inputs(inputs)?;
         let changed = !same_inputs(&self.inputs, inputs);
         let saved = self.group_unknowns();
+        // The last good step's log: an attempt rewrites it. Usually empty (events and
+        // switches are rare), so the copy costs next to nothing.
+        let log = (
+            self.events.clone(),
+            self.switches.clone(),
+            self.candidates.clone(),
+        );
         let mut failure = TwinError::Setting("no sub-step division was tried");
         for (attempt, substeps) in SUBSTEPS.iter().enumerate() {
             self.events.clear();
@@ -478,6 +509,7 @@ impl<T: Real> Twin<T> {
                 }
             }
         }
+        (self.events, self.switches, self.candidates) = log;
         Err(failure)
     }
 
@@ -510,6 +542,7 @@ impl<T: Real> Twin<T> {
     fn check_energy(&self, w: &Work<T>) -> Result<Audit<T>, TwinError> {
         let links = self.slot.links(&self.params);
         let a = self.audit_of(&links, w);
+        audit_finite(&a, w.t)?;
         let jump = a.residual() - self.audit.residual();
         let scale = T::one() + a.motor_work.abs() + a.kinetic.abs() + a.potential.abs();
         if jump.abs() <= self.settings.energy_tol * scale {
@@ -540,6 +573,11 @@ impl<T: Real> Twin<T> {
         substeps: u32,
     ) -> Result<(), TwinError> {
         let t_end = T::c((self.steps + 1) as f64) * self.settings.h;
+        if !t_end.finite() {
+            return Err(TwinError::Setting(
+                "the time n·h of the next step overflows the scalar type",
+            ));
+        }
         let h_max = self.settings.h / T::c(substeps as f64);
         if changed {
             // Inputs changed: re-evaluate here and see whether the mode still holds.
@@ -1587,16 +1625,48 @@ fn same_inputs<T: Real>(a: &Inputs<T>, b: &Inputs<T>) -> bool {
     motor && same_bits(a.load, b.load)
 }
 
+/// The audit's terms are finite, or the error that says they are not. The works are
+/// integrated with the motion but not checked by its evaluations, and an energy can
+/// overflow at finite speeds (`½ J_s ω²` with a huge J_s): past the scalar's range the
+/// balance test would compare infinities and pass.
+fn audit_finite<T: Real>(a: &Audit<T>, t: T) -> Result<(), TwinError> {
+    let terms = [
+        a.motor_work,
+        a.load_work,
+        a.impact_loss,
+        a.kinetic,
+        a.potential,
+        a.initial,
+        a.residual(),
+    ];
+    if terms.iter().all(|x| x.finite()) {
+        Ok(())
+    } else {
+        Err(TwinError::Step(StepError::NonFinite {
+            time: t.to_f64(),
+            what: "the energy audit (a work or an energy overflows the scalar)",
+        }))
+    }
+}
+
 fn check_inputs<T: Real>(inputs: &Inputs<T>) -> Result<(), TwinError> {
     if !(inputs.load.finite() && inputs.load >= T::zero()) {
         return Err(TwinError::Setting(
             "the load torque T_r must be finite and ≥ 0",
         ));
     }
-    if let super::slot::MotorInput::Torque(v) = inputs.motor {
-        if !v.finite() {
+    match inputs.motor {
+        super::slot::MotorInput::Torque(v) if !v.finite() => {
             return Err(TwinError::Setting("the motor torque must be finite"));
         }
+        // A law's parameters are checked here; what a user function returns is checked
+        // at every evaluation (a non-finite torque fails the step, state kept).
+        super::slot::MotorInput::Law(m) if m.validate().is_err() => {
+            return Err(TwinError::Setting(
+                "the motor law's parameters must be finite",
+            ));
+        }
+        _ => {}
     }
     if let Some((a, w)) = inputs.measured {
         if !(a.finite() && w.finite()) {
