@@ -26,9 +26,8 @@ fn twin<T: Real>(steps: u32) -> Result<T, String> {
         measured: None,
     };
     let settings = TwinSettings::reference(T::c(1e-4));
-    let mut twin = Box::new(
-        Twin::new(CccParams::reference(), settings, inputs).map_err(|e| e.to_string())?,
-    );
+    let mut twin =
+        Box::new(Twin::new(CccParams::reference(), settings, inputs).map_err(|e| e.to_string())?);
     for _ in 0..steps {
         twin.step(black_box(&inputs)).map_err(|e| e.to_string())?;
     }

@@ -540,8 +540,13 @@ fn validate<T: Real>(m: &mut Model<T>) -> Result<(), ModelError> {
             });
         }
     }
-    // Newton stops at 64 ulps of the mechanism's size: 1.4e-14 m per metre in f64.
-    m.newton_tol = T::c(64.0) * T::EPS * scale;
+    // Newton stops at 64 ulps of the mechanism's size in f64 (1.4e-14 m per metre)
+    // and at 8 ulps in f32 (9.5e-7 m per metre). f32's 64 ulps, 7.6e-6 m per metre,
+    // left the joints of a triad or of A68's six-link group that far apart, and that
+    // broke the twin's energy balance at S2's dead points (0.1789 s, in 16 sub-steps
+    // too). f32's residual gets under 1 ulp; 8 still takes at most one iteration a
+    // solve in S2, as 64 did.
+    m.newton_tol = T::c(64.0 * f64::EPSILON).max(T::c(8.0) * T::EPS) * scale;
     check_sequence(m)?;
     let Model {
         drives,

@@ -737,10 +737,11 @@ impl<T: Real> Twin<T> {
         let shaft = shaft_speed(mode, links);
         let mut locked = T::zero();
         let mut any_locked = false;
-        // A release fires when c_k falls below -1e-9 (T_r + 1 N·m), not below 0: with
-        // T_r = 0 an engaged lever carries exactly 0, and rounding (1e-15 N·m) must not
-        // fire a release every few steps. The event moves by 1e-9 N·m / ċ_k, nothing.
-        let c_tol = T::c(1e-9) * (inputs.load + T::one());
+        // A release fires when c_k falls below -1e-9 (T_r + 1 N·m) (f32: see torque_tol),
+        // not below 0: with T_r = 0 an engaged lever carries exactly 0, and rounding
+        // (1e-15 N·m) must not fire a release every few steps. The event moves by
+        // 1e-9 N·m / ċ_k, nothing.
+        let c_tol = torque_tol(inputs.load + T::one());
         for (k, ((_, lever), clutch)) in BRANCHES.iter().zip(mode.clutches()).enumerate() {
             let w = links.get(*lever).map_or(T::zero(), |s| s.omega);
             match clutch {
@@ -860,7 +861,7 @@ impl<T: Real> Twin<T> {
         let d = self.drive;
         let shaft = shaft_speed(from, &links);
         let scale_w = links.iter().fold(T::one(), |m, s| m.max(s.omega.abs()));
-        let tol_w = T::c(1e-6) * scale_w;
+        let tol_w = speed_tol::<T>() * scale_w;
         // Which levers touch the shaft (may lock or engage), and the shaft's options.
         let mut contact = [false; 2];
         for (k, ((_, lever), clutch)) in BRANCHES.iter().zip(from.clutches()).enumerate() {
@@ -1061,7 +1062,7 @@ impl<T: Real> Twin<T> {
             let mapped = self.cand.links(&self.params);
             let off = (1..9).fold(T::zero(), |e, p| e.max((mapped[p].omega - omega[p]).abs()));
             self.speed_gap = off;
-            if !(off <= T::c(1e-6) * scale_w) {
+            if !(off <= speed_tol::<T>() * scale_w) {
                 log::debug!("candidate {m} in {coords} coordinates cannot carry the speeds (off by {off:?} rad/s)");
                 continue;
             }
@@ -1079,7 +1080,7 @@ impl<T: Real> Twin<T> {
         let c = self.cand.clutch_torques(&self.params, &links);
         let d = self.drive;
         let torque_scale = inputs.load + T::c(1.0) + c[0].abs() + c[1].abs();
-        let tol_c = T::c(1e-9) * torque_scale;
+        let tol_c = torque_tol(torque_scale);
         let alpha_scale = links.iter().fold(T::one(), |a, s| a.max(s.alpha.abs()));
         let tol_a = T::c(1e-9) * alpha_scale;
         let shaft_alpha = shaft_accel(m, &links);
@@ -1609,6 +1610,28 @@ fn scan_choices<T: Real>(
 fn unwrap_near<T: Real>(a: T, reference: T) -> T {
     let tau = T::two_pi();
     a + tau * ((reference - a) / tau).round()
+}
+
+/// Relative threshold on angular speeds (of the largest): whether a lever touches the
+/// shaft, and whether a coordinate choice carries the speeds it is given. 1e-6, or 1000
+/// ulps if that is larger (f32, 1.2e-4). A choice at its dead point is off by O(1); a
+/// good one by rounding, amplified near a dead point: 2.3e-15 in f64 and 2.5e-6 (20
+/// ulps) in f32 at S2's events, over f32's 1e-6, so that f32 refused every mode at the
+/// first breakaway (0.0666 s) and went on in I0.
+fn speed_tol<T: Real>() -> T {
+    T::c(1e-6).max(T::EPS * T::c(1e3))
+}
+
+/// The threshold on transmitted torques for a torque scale `s` (T_r + 1 N·m, plus the
+/// levers' torques in the consistency conditions): 1e-9 s, or if that is larger (f32)
+/// 10 ulps of `s` plus 1e4 ulps of 1 N·m. A lever that carries nothing computes c as a
+/// sum of the mechanism's own torques (up to hundreds of N·m) that cancel: S2 without
+/// load rounds it to 6e-13 N·m at most in f64 and 2.4e-4 N·m in f32 (~2700 ulps of
+/// 1 N·m in both), far over f32's 1e-9 (T_r + 1 N·m): it fired a release every few
+/// steps. The f32 threshold is 1.2e-3 N·m at T_r = 0 and 2.1e-3 N·m at T_r = 800 N·m,
+/// which moves a release by ~1e-5 s in S2.
+fn torque_tol<T: Real>(s: T) -> T {
+    (T::c(1e-9) * s).max(T::EPS * (T::c(10.0) * s + T::c(1e4)))
 }
 
 fn same_bits<T: Real>(a: T, b: T) -> bool {
