@@ -121,10 +121,10 @@ const PINS: &[Pin<'static>] = &[
     Pin {
         args: "ccc-s2 --f32",
         exit: 0,
-        csv: "0534d5c336ba5f0f0be2fc1db6491d4d7dea56d1d5e3a2134ba49674b5214aea",
+        csv: "5f8771bc3d1896872dbd9f8becfb786adfdb622b60a4b2ccb110d8109a355994",
         logs: Some((
-            "6df8f68c1d8136ee87be648796918b1a2219aa47c213832dd930d2959fecdde8",
-            "d0ce85035a836942f749e75f31d8ce9978038a3fab8c49c4bfc527bf8678819c",
+            "97da2847a078a243936a635b7f9b4b70126fb2730cba62e26ceb2f25a597f320",
+            "74ffff48e19368d66a6b76e1e32bb4dfe592c82b253c947516d901ba7bc4ba25",
         )),
     },
 ];
