@@ -243,6 +243,42 @@ fn is_help(a: &str) -> bool {
     a == "--help" || a == "-h"
 }
 
+/// An option's name and, for `--name=value`, its inline value.
+fn split_option(arg: &str) -> (&str, Option<String>) {
+    match arg.split_once('=') {
+        Some((n, v)) if n.starts_with("--") => (n, Some(v.to_string())),
+        _ => (arg, None),
+    }
+}
+
+/// A flag (`--quiet`) must not be given a value.
+fn no_value(name: &str, inline: Option<String>, arg: &str) -> Result<(), UsageError> {
+    match inline {
+        Some(_) => Err(usage_err(format!("{name}: takes no value (got '{arg}')"))),
+        None => Ok(()),
+    }
+}
+
+/// An option's value: inline (`--name=value`) or the next argument, `args[*k]`, which
+/// is then consumed.
+fn option_value(
+    name: &str,
+    inline: Option<String>,
+    args: &[String],
+    k: &mut usize,
+) -> Result<String, UsageError> {
+    match inline {
+        Some(v) => Ok(v),
+        None => {
+            let v = args
+                .get(*k)
+                .ok_or_else(|| usage_err(format!("{name}: missing value")))?;
+            *k += 1;
+            Ok(v.clone())
+        }
+    }
+}
+
 fn parse_run(args: &[String]) -> Result<Command, UsageError> {
     let mut scenario = None;
     let mut out = Output::Stdout;
@@ -271,15 +307,10 @@ fn parse_run(args: &[String]) -> Result<Command, UsageError> {
             })?);
             continue;
         }
-        let (name, inline) = match arg.split_once('=') {
-            Some((n, v)) if n.starts_with("--") => (n, Some(v.to_string())),
-            _ => (arg, None),
-        };
+        let (name, inline) = split_option(arg);
         match name {
             "--f32" | "--quiet" | "--ccw" => {
-                if inline.is_some() {
-                    return Err(usage_err(format!("{name}: takes no value (got '{arg}')")));
-                }
+                no_value(name, inline, arg)?;
                 match name {
                     "--f32" => f32 = true,
                     "--quiet" => quiet = true,
@@ -287,16 +318,7 @@ fn parse_run(args: &[String]) -> Result<Command, UsageError> {
                 }
             }
             "--out" | "--h" | "--t-end" | "--every" | "--load" | "--motor" => {
-                let value = match inline {
-                    Some(v) => v,
-                    None => {
-                        let v = args
-                            .get(k)
-                            .ok_or_else(|| usage_err(format!("{name}: missing value")))?;
-                        k += 1;
-                        v.clone()
-                    }
-                };
+                let value = option_value(name, inline, args, &mut k)?;
                 match name {
                     "--out" => out = parse_out(&value)?,
                     "--h" => h = Some(parse_seconds(name, &value)?),
@@ -348,28 +370,14 @@ fn parse_batch(args: &[String]) -> Result<Command, UsageError> {
             file = Some(PathBuf::from(arg));
             continue;
         }
-        let (name, inline) = match arg.split_once('=') {
-            Some((n, v)) if n.starts_with("--") => (n, Some(v.to_string())),
-            _ => (arg, None),
-        };
+        let (name, inline) = split_option(arg);
         match name {
             "--quiet" => {
-                if inline.is_some() {
-                    return Err(usage_err(format!("{name}: takes no value (got '{arg}')")));
-                }
+                no_value(name, inline, arg)?;
                 quiet = true;
             }
             "--out-dir" | "--threads" => {
-                let value = match inline {
-                    Some(v) => v,
-                    None => {
-                        let v = args
-                            .get(k)
-                            .ok_or_else(|| usage_err(format!("{name}: missing value")))?;
-                        k += 1;
-                        v.clone()
-                    }
-                };
+                let value = option_value(name, inline, args, &mut k)?;
                 if name == "--threads" {
                     threads = parse_threads(&value)?;
                 } else if value.is_empty() {
