@@ -4,16 +4,8 @@
 
 use std::path::{Path, PathBuf};
 
-/// Runs the command line through the library; returns (exit code, stdout, stderr).
-fn run(args: &[&str]) -> (u8, String, String) {
-    let (mut out, mut err) = (Vec::new(), Vec::new());
-    let code = host_sim::main_with(args.iter().copied(), &mut out, &mut err);
-    (
-        code,
-        String::from_utf8(out).expect("utf-8 stdout"),
-        String::from_utf8(err).expect("utf-8 stderr"),
-    )
-}
+mod common;
+use common::run;
 
 /// A CSV as text cells: header names and rows.
 struct Csv {

@@ -1,5 +1,5 @@
-//! Helpers shared by the test files `golden.rs` and `batch.rs` (each uses a part, hence
-//! the `dead_code` allowance).
+//! Helpers shared by the test files `golden.rs`, `batch.rs` and `ccc_cli.rs` (each uses
+//! a part, hence the `dead_code` allowance).
 
 #![allow(dead_code)]
 
