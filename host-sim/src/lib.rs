@@ -32,6 +32,7 @@ pub mod cli;
 pub mod columns;
 pub mod run;
 pub mod scenarios;
+pub mod sweep;
 
 pub use batch::{run_jobs, Progress};
 pub use ccc::{CccScenario, CccSummary, End};

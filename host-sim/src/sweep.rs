@@ -1,0 +1,805 @@
+//! `host-sim sweep FILE --out-dir DIR`: a grid of variants of one run, on N threads,
+//! with a progress bar, one table row per variant and heat-maps of a chosen outcome.
+//!
+//! The thesis's own recommendation (section 8.2) is to search the converter's design
+//! space for the variant that stores the motor's energy fastest against a load; a sweep
+//! file says which values of which keys to combine:
+//!
+//! ```toml
+//! base = "ccc-s2"              # a built-in scenario, or a run file (path relative to this file)
+//! [set]                        # fixed changes to the base, by dotted key of its run file
+//! "run.t_end" = 0.3
+//! [[axis]]                     # the grid: every combination of the axes' values
+//! key = "converter.mass"
+//! label = "oscillating mass, kg"
+//! values = [20.0, 30.0, 40.0]
+//! [[axis]]
+//! key = "run.motor"
+//! from = 8.0                   # or a range: `steps` values from `from` to `to`
+//! to = 16.0
+//! steps = 5
+//! [[heatmap]]                  # a heat-map of a table column over two axes
+//! metric = "first_breakaway"
+//! x = "converter.mass"
+//! y = "run.motor"
+//! ```
+//!
+//! A variant is the base run file's TOML tree with the `[set]` keys and one value of
+//! each axis written into it, parsed again by the run-file parser: a key or value the
+//! run file does not take is refused with the run file's own message, for every variant
+//! before anything runs. Keys are dotted paths into the tree; a number selects an
+//! element of an array (`link.2.mass` is the third `[[link]]`'s mass).
+//!
+//! Determinism: variants are numbered in grid order (the first axis outermost, the
+//! last fastest); each runs alone on its own model ([`crate::run_jobs`]) and the table
+//! and pictures are written from the results in that order, after all have run. Only
+//! the progress bar on `stderr` depends on the finishing order.
+
+use std::fmt;
+use std::time::Duration;
+use toml::{Table, Value};
+
+/// The most variants a sweep runs (a guard against a grid typo that would run for
+/// days: 10,000 S2 variants of 0.3 s take about an hour on 2 cores).
+pub const MAX_VARIANTS: usize = 10_000;
+
+/// The most values a range axis takes.
+pub const MAX_STEPS: usize = 1_000;
+
+/// One axis of the grid: a dotted key of the run file and the values it takes.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Axis {
+    /// The dotted key, e.g. `run.motor`.
+    pub key: String,
+    /// Its label in pictures (the key when none is given).
+    pub label: String,
+    /// The values, in the order given.
+    pub values: Vec<Value>,
+}
+
+impl Axis {
+    /// The values as numbers, or `None` if one of them is not a number (an axis of
+    /// names, e.g. the drive direction, cannot be a heat-map's axis).
+    pub fn numbers(&self) -> Option<Vec<f64>> {
+        self.values.iter().map(number).collect()
+    }
+}
+
+/// A number from a TOML integer or float.
+pub fn number(v: &Value) -> Option<f64> {
+    match v {
+        Value::Float(x) => Some(*x),
+        Value::Integer(i) => Some(*i as f64),
+        _ => None,
+    }
+}
+
+/// A heat-map to draw: a numeric table column over two numeric axes.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct HeatSpec {
+    /// The table column.
+    pub metric: Metric,
+    /// The axis across (index into the sweep's axes).
+    pub x: usize,
+    /// The axis up, or `None` for a sweep of one axis (a single row).
+    pub y: Option<usize>,
+}
+
+/// The outcomes of a variant that a heat-map can show: the numeric columns of
+/// `sweep.csv` (described in `host-sim help`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Metric {
+    /// First breakaway, s: the first event that starts the held shaft.
+    FirstBreakaway,
+    /// Work done against the load, J.
+    LoadWork,
+    /// Mean power delivered to the load over the run, W.
+    LoadPower,
+    /// Motor work, J.
+    MotorWork,
+    /// Shaft angle turned, rad (CCW positive).
+    ShaftAngle,
+    /// Energy lost in plastic impacts, J.
+    ImpactLoss,
+    /// Mode-change events.
+    Events,
+    /// Coordinate switches.
+    Switches,
+    /// Time of the last good state, s (where a run that failed stopped).
+    Time,
+}
+
+impl Metric {
+    /// Every metric, in table order.
+    pub const ALL: [Metric; 9] = [
+        Metric::Time,
+        Metric::FirstBreakaway,
+        Metric::Events,
+        Metric::Switches,
+        Metric::ShaftAngle,
+        Metric::MotorWork,
+        Metric::LoadWork,
+        Metric::LoadPower,
+        Metric::ImpactLoss,
+    ];
+
+    /// Its column name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Metric::FirstBreakaway => "first_breakaway",
+            Metric::LoadWork => "load_work",
+            Metric::LoadPower => "load_power",
+            Metric::MotorWork => "motor_work",
+            Metric::ShaftAngle => "shaft_angle",
+            Metric::ImpactLoss => "impact_loss",
+            Metric::Events => "events",
+            Metric::Switches => "switches",
+            Metric::Time => "time",
+        }
+    }
+
+    /// What it is, with its unit (a heat-map's colour-bar label).
+    pub fn describe(self) -> &'static str {
+        match self {
+            Metric::FirstBreakaway => "first breakaway, s",
+            Metric::LoadWork => "work against the load, J",
+            Metric::LoadPower => "mean power to the load, W",
+            Metric::MotorWork => "motor work, J",
+            Metric::ShaftAngle => "shaft angle turned, rad",
+            Metric::ImpactLoss => "impact losses, J",
+            Metric::Events => "mode changes",
+            Metric::Switches => "coordinate switches",
+            Metric::Time => "time reached, s",
+        }
+    }
+
+    /// The metric of a column name.
+    pub fn from_name(name: &str) -> Option<Metric> {
+        Metric::ALL.into_iter().find(|m| m.name() == name)
+    }
+
+    /// The names, for messages.
+    pub fn names() -> String {
+        Metric::ALL.map(Metric::name).join(", ")
+    }
+}
+
+/// What a variant's run gave, in the table's terms (`None`: does not apply, or the run
+/// did not get that far).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Outcome {
+    /// The exit status the run alone gives.
+    pub exit: u8,
+    /// How it ended: `completed`, `singularity`, `failed` or `error`.
+    pub end: &'static str,
+    /// Steps completed.
+    pub steps: Option<u64>,
+    /// The metrics, in [`Metric::ALL`] order.
+    pub metrics: [Option<f64>; Metric::ALL.len()],
+    /// The error of a run that did not complete.
+    pub message: Option<String>,
+}
+
+impl Outcome {
+    /// The value of `m`.
+    pub fn get(&self, m: Metric) -> Option<f64> {
+        let k = Metric::ALL.iter().position(|x| *x == m)?;
+        self.metrics.get(k).copied().flatten()
+    }
+}
+
+/// The grid's variants: for each, the index of its value on every axis; the first
+/// axis outermost, the last fastest. Errors when the product exceeds `max`.
+pub fn grid(axes: &[Axis], max: usize) -> Result<Vec<Vec<usize>>, String> {
+    let mut total: usize = 1;
+    for a in axes {
+        total = total
+            .checked_mul(a.values.len())
+            .filter(|t| *t <= max)
+            .ok_or_else(|| {
+                format!(
+                    "the grid has more than {max} variants ({})",
+                    axes.iter()
+                        .map(|a| format!("{} × {}", a.values.len(), a.key))
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                )
+            })?;
+    }
+    let mut out = Vec::with_capacity(total);
+    for k in 0..total {
+        let mut rest = k;
+        let mut idx = vec![0; axes.len()];
+        for (slot, a) in idx.iter_mut().zip(axes).rev() {
+            *slot = rest % a.values.len();
+            rest /= a.values.len();
+        }
+        out.push(idx);
+    }
+    Ok(out)
+}
+
+/// `steps` values from `from` to `to`, both included, evenly spaced; the ends are
+/// exact (the k-th value is `from + (to - from)·k/(steps - 1)`, not a running sum, so
+/// no rounding accumulates).
+pub fn range(from: f64, to: f64, steps: usize) -> Result<Vec<f64>, String> {
+    if !from.is_finite() || !to.is_finite() {
+        return Err(format!("from = {from}, to = {to}: must be finite"));
+    }
+    if !(2..=MAX_STEPS).contains(&steps) {
+        return Err(format!("steps = {steps}: must be 2..={MAX_STEPS}"));
+    }
+    let n = (steps - 1) as f64;
+    Ok((0..steps)
+        .map(|k| {
+            if k == steps - 1 {
+                to
+            } else {
+                from + (to - from) * (k as f64 / n)
+            }
+        })
+        .collect())
+}
+
+/// Writes `value` at the dotted `key` of `root`, creating the tables on its way: `a.b.c`
+/// is `root[a][b][c]`; a segment that is a number selects that element (from 0) of an
+/// array. Errors name the key and the segment.
+pub fn set_dotted(root: &mut Table, key: &str, value: Value) -> Result<(), String> {
+    let segments: Vec<&str> = key.split('.').collect();
+    if segments.iter().any(|s| s.trim().is_empty()) {
+        return Err(format!("key '{key}': an empty segment"));
+    }
+    let Some((last, path)) = segments.split_last() else {
+        return Err(format!("key '{key}': empty"));
+    };
+    let mut here = Node::Table(root);
+    for (k, seg) in path.iter().enumerate() {
+        let so_far = segments[..=k].join(".");
+        here = match here {
+            Node::Table(t) => {
+                let next = t
+                    .entry(seg.to_string())
+                    .or_insert_with(|| Value::Table(Table::new()));
+                Node::of(next, &so_far, key)?
+            }
+            Node::Array(a) => {
+                let n = a.len();
+                let next = index(seg, n).and_then(|i| a.get_mut(i)).ok_or_else(|| {
+                    format!("key '{key}': '{so_far}' is out of the array of {n} elements")
+                })?;
+                Node::of(next, &so_far, key)?
+            }
+        };
+    }
+    match here {
+        Node::Table(t) => {
+            t.insert(last.to_string(), value);
+        }
+        Node::Array(a) => {
+            let n = a.len();
+            let slot = index(last, n).and_then(|i| a.get_mut(i)).ok_or_else(|| {
+                format!("key '{key}': '{last}' is out of the array of {n} elements")
+            })?;
+            *slot = value;
+        }
+    }
+    Ok(())
+}
+
+enum Node<'a> {
+    Table(&'a mut Table),
+    Array(&'a mut Vec<Value>),
+}
+
+impl<'a> Node<'a> {
+    fn of(v: &'a mut Value, so_far: &str, key: &str) -> Result<Node<'a>, String> {
+        match v {
+            Value::Table(t) => Ok(Node::Table(t)),
+            Value::Array(a) => Ok(Node::Array(a)),
+            other => Err(format!(
+                "key '{key}': '{so_far}' is a {}, not a table",
+                other.type_str()
+            )),
+        }
+    }
+}
+
+fn index(seg: &str, len: usize) -> Option<usize> {
+    seg.parse::<usize>().ok().filter(|i| *i < len)
+}
+
+/// The progress bar of a sweep: `sweep  [#######.............]  12/40  30%  0:34
+/// elapsed  ~1:19 left`. The estimate is the mean time per finished variant times the
+/// variants left (variants differ in cost, so it is rough early on).
+pub fn progress_bar(done: usize, total: usize, elapsed: Duration) -> String {
+    const WIDTH: usize = 24;
+    let total = total.max(1);
+    let done = done.min(total);
+    let filled = WIDTH * done / total;
+    let pct = 100 * done / total;
+    let mut s = format!(
+        "sweep  [{}{}] {done:>w$}/{total} {pct:>3}%  {} elapsed",
+        "#".repeat(filled),
+        ".".repeat(WIDTH - filled),
+        clock(elapsed),
+        w = total.to_string().len()
+    );
+    if done > 0 && done < total {
+        let left = elapsed.mul_f64((total - done) as f64 / done as f64);
+        s.push_str(&format!("  ~{} left", clock(left)));
+    }
+    s
+}
+
+/// `m:ss`, or `h:mm:ss` from an hour.
+fn clock(d: Duration) -> String {
+    let s = d.as_secs();
+    if s >= 3600 {
+        format!("{}:{:02}:{:02}", s / 3600, s / 60 % 60, s % 60)
+    } else {
+        format!("{}:{:02}", s / 60, s % 60)
+    }
+}
+
+/// A value as a table cell or a label: numbers in shortest round-trip form, strings
+/// bare, anything else as TOML.
+pub fn show(v: &Value) -> String {
+    match v {
+        Value::Float(x) => x.to_string(),
+        Value::Integer(i) => i.to_string(),
+        Value::String(s) => s.clone(),
+        Value::Boolean(b) => b.to_string(),
+        other => other.to_string(),
+    }
+}
+
+/// A parsed sweep file.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Sweep {
+    /// The sweep file's name, for messages.
+    pub origin: String,
+    /// The base as written: a built-in scenario's name or a run file's path.
+    pub base: String,
+    /// The base's name in messages (the run file's path, or the built-in's name).
+    pub base_origin: String,
+    /// The base run file's TOML tree with the `[set]` keys written in.
+    pub base_tree: Table,
+    /// The grid's axes, in file order.
+    pub axes: Vec<Axis>,
+    /// The heat-maps to draw.
+    pub heatmaps: Vec<HeatSpec>,
+    /// Runs at a time from the file (`--threads` overrides it).
+    pub threads: Option<usize>,
+}
+
+#[derive(serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SweepFile {
+    base: String,
+    #[serde(default)]
+    set: Table,
+    #[serde(default)]
+    axis: Vec<AxisFile>,
+    #[serde(default)]
+    heatmap: Vec<HeatFile>,
+    threads: Option<usize>,
+}
+
+#[derive(serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct AxisFile {
+    key: String,
+    label: Option<String>,
+    values: Option<Vec<Value>>,
+    from: Option<f64>,
+    to: Option<f64>,
+    steps: Option<usize>,
+}
+
+#[derive(serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct HeatFile {
+    metric: String,
+    x: Option<String>,
+    y: Option<String>,
+}
+
+impl Sweep {
+    /// The variants' run-file trees, in grid order, each with the index of its value on
+    /// every axis. Errors name the variant and the key.
+    pub fn variants(&self) -> Result<Vec<(Vec<usize>, Table)>, SweepError> {
+        let grid = grid(&self.axes, MAX_VARIANTS).map_err(|e| self.err(e))?;
+        let mut out = Vec::with_capacity(grid.len());
+        for (k, idx) in grid.into_iter().enumerate() {
+            let mut tree = self.base_tree.clone();
+            for (a, &i) in self.axes.iter().zip(&idx) {
+                let v = a.values.get(i).cloned().unwrap_or(Value::Boolean(false));
+                set_dotted(&mut tree, &a.key, v)
+                    .map_err(|e| self.err(format!("variant {k}: {e}")))?;
+            }
+            out.push((idx, tree));
+        }
+        Ok(out)
+    }
+
+    /// The variant's axis values as `key = value, ...`.
+    pub fn describe(&self, idx: &[usize]) -> String {
+        self.axes
+            .iter()
+            .zip(idx)
+            .map(|(a, &i)| {
+                format!(
+                    "{} = {}",
+                    a.key,
+                    a.values.get(i).map(show).unwrap_or_default()
+                )
+            })
+            .collect::<Vec<_>>()
+            .join(", ")
+    }
+
+    fn err(&self, msg: impl fmt::Display) -> SweepError {
+        SweepError(format!("{}: {msg}", self.origin))
+    }
+}
+
+/// Parses a sweep file. `load_base` turns the file's `base` into the base run file's
+/// TOML tree and its name for messages (a built-in's embedded file, or a file read from
+/// disk relative to the sweep file). Everything is checked here: the keys of `[set]`
+/// and of the axes are written into the base tree (the run-file parser checks the
+/// variants themselves), the axes have values, the heat-maps name a metric and
+/// numeric axes.
+pub fn parse_sweep(
+    text: &str,
+    origin: &str,
+    load_base: impl Fn(&str) -> Result<(Table, String), String>,
+) -> Result<Sweep, SweepError> {
+    let err = |m: String| SweepError(format!("{origin}: {m}"));
+    let file: SweepFile = toml::from_str(text).map_err(|e| err(one_line(&e.to_string())))?;
+    let (mut base_tree, base_origin) =
+        load_base(&file.base).map_err(|e| err(format!("base = '{}': {e}", file.base)))?;
+    for (key, value) in &file.set {
+        set_dotted(&mut base_tree, key, value.clone()).map_err(|e| err(format!("[set] {e}")))?;
+    }
+    if let Some(t) = file.threads {
+        if !(1..=crate::cli::MAX_THREADS).contains(&t) {
+            return Err(err(format!(
+                "threads = {t}: must be 1..={}",
+                crate::cli::MAX_THREADS
+            )));
+        }
+    }
+    let mut axes: Vec<Axis> = Vec::with_capacity(file.axis.len());
+    for (k, a) in file.axis.into_iter().enumerate() {
+        let at = format!("axis {} ('{}')", k + 1, a.key);
+        if axes.iter().any(|b| b.key == a.key) {
+            return Err(err(format!("{at}: the key is already an axis")));
+        }
+        if a.key.trim().is_empty() {
+            return Err(err(format!("axis {}: key: empty", k + 1)));
+        }
+        let values = match (a.values, a.from, a.to, a.steps) {
+            (Some(v), None, None, None) if !v.is_empty() => v,
+            (Some(_), None, None, None) => return Err(err(format!("{at}: values: empty"))),
+            (None, Some(from), Some(to), Some(steps)) => range(from, to, steps)
+                .map_err(|e| err(format!("{at}: {e}")))?
+                .into_iter()
+                .map(Value::Float)
+                .collect(),
+            _ => {
+                return Err(err(format!(
+                    "{at}: give either values = [...] or all of from, to and steps"
+                )))
+            }
+        };
+        axes.push(Axis {
+            label: a.label.unwrap_or_else(|| a.key.clone()),
+            key: a.key,
+            values,
+        });
+    }
+    let numeric: Vec<usize> = (0..axes.len())
+        .filter(|&k| axes[k].numbers().is_some())
+        .collect();
+    let find = |name: &str, what: &str| -> Result<usize, SweepError> {
+        let k = axes
+            .iter()
+            .position(|a| a.key == name)
+            .ok_or_else(|| err(format!("heatmap {what} = '{name}': not an axis")))?;
+        if axes[k].numbers().is_none() {
+            return Err(err(format!(
+                "heatmap {what} = '{name}': the axis has values that are not numbers"
+            )));
+        }
+        Ok(k)
+    };
+    let mut heatmaps = Vec::new();
+    for h in &file.heatmap {
+        let metric = Metric::from_name(&h.metric).ok_or_else(|| {
+            err(format!(
+                "heatmap metric = '{}': unknown (known: {})",
+                h.metric,
+                Metric::names()
+            ))
+        })?;
+        let x = match &h.x {
+            Some(x) => find(x, "x")?,
+            None => *numeric
+                .first()
+                .ok_or_else(|| err("heatmap: no axis of numbers to draw".to_string()))?,
+        };
+        let y = match &h.y {
+            Some(y) => Some(find(y, "y")?),
+            None => numeric.iter().copied().find(|&k| k != x),
+        };
+        if y == Some(x) {
+            return Err(err(format!(
+                "heatmap: x and y are the same axis '{}'",
+                axes[x].key
+            )));
+        }
+        heatmaps.push(HeatSpec { metric, x, y });
+    }
+    if file.heatmap.is_empty() {
+        // The default: the first breakaway over the first two numeric axes.
+        if let Some(&x) = numeric.first() {
+            heatmaps.push(HeatSpec {
+                metric: Metric::FirstBreakaway,
+                x,
+                y: numeric.get(1).copied(),
+            });
+        }
+    }
+    let sweep = Sweep {
+        origin: origin.to_string(),
+        base: file.base,
+        base_origin,
+        base_tree,
+        axes,
+        heatmaps,
+        threads: file.threads,
+    };
+    // Every key must be writable into the base tree (the grid's size is checked too).
+    sweep.variants()?;
+    Ok(sweep)
+}
+
+/// The toml crate's multi-line message (a location line, the source line with a caret
+/// under it, the message) in one line: `line 2, column 1: unknown field ...`.
+fn one_line(msg: &str) -> String {
+    let source_line = |l: &str| {
+        let (num, rest) = l.split_once('|').unwrap_or(("x", ""));
+        num.trim().chars().all(|c| c.is_ascii_digit()) && (rest.is_empty() || rest.starts_with(' '))
+    };
+    msg.lines()
+        .map(str::trim)
+        .filter(|l| !l.is_empty() && !source_line(l) && !l.chars().all(|c| c == '^' || c == ' '))
+        .map(|l| l.trim_start_matches("TOML parse error at "))
+        .collect::<Vec<_>>()
+        .join(": ")
+}
+
+/// A sweep file error: the file and what is wrong.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct SweepError(pub String);
+
+impl fmt::Display for SweepError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for SweepError {}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn axis(key: &str, values: &[f64]) -> Axis {
+        Axis {
+            key: key.into(),
+            label: key.into(),
+            values: values.iter().map(|v| Value::Float(*v)).collect(),
+        }
+    }
+
+    #[test]
+    fn grid_first_axis_outermost() {
+        let axes = [axis("a", &[1.0, 2.0]), axis("b", &[1.0, 2.0, 3.0])];
+        let g = grid(&axes, 100).unwrap();
+        let want: Vec<Vec<usize>> = vec![
+            vec![0, 0],
+            vec![0, 1],
+            vec![0, 2],
+            vec![1, 0],
+            vec![1, 1],
+            vec![1, 2],
+        ];
+        assert_eq!(g, want);
+        assert_eq!(grid(&[], 100).unwrap(), vec![Vec::<usize>::new()]);
+        let err = grid(&axes, 5).unwrap_err();
+        assert!(err.contains("more than 5 variants"), "{err}");
+        assert!(err.contains("3 × b"), "{err}");
+    }
+
+    #[test]
+    fn ranges_hit_both_ends() {
+        assert_eq!(range(8.0, 16.0, 5).unwrap(), [8.0, 10.0, 12.0, 14.0, 16.0]);
+        // 0.1 steps: a running sum would end at 0.30000000000000004.
+        let r = range(0.0, 0.3, 4).unwrap();
+        assert_eq!(r[3], 0.3);
+        assert!((r[1] - 0.1).abs() < 1e-16);
+        assert_eq!(range(5.0, 1.0, 3).unwrap(), [5.0, 3.0, 1.0]);
+        assert!(range(0.0, 1.0, 1).unwrap_err().contains("steps = 1"));
+        assert!(range(0.0, f64::NAN, 3).unwrap_err().contains("finite"));
+    }
+
+    #[test]
+    fn dotted_keys() {
+        let mut t: Table = "[run]\nmotor = 12.0\n[[link]]\nmass = 1.0\n[[link]]\nmass = 2.0\n"
+            .parse()
+            .unwrap();
+        set_dotted(&mut t, "run.motor", Value::Float(10.0)).unwrap();
+        set_dotted(&mut t, "converter.mass", Value::Float(40.0)).unwrap();
+        set_dotted(&mut t, "link.1.mass", Value::Float(3.0)).unwrap();
+        assert_eq!(t["run"]["motor"].as_float(), Some(10.0));
+        assert_eq!(t["converter"]["mass"].as_float(), Some(40.0));
+        assert_eq!(t["link"][1]["mass"].as_float(), Some(3.0));
+        assert_eq!(t["link"][0]["mass"].as_float(), Some(1.0));
+        let e = set_dotted(&mut t, "link.2.mass", Value::Float(1.0)).unwrap_err();
+        assert!(e.contains("'link.2' is out of the array of 2"), "{e}");
+        let e = set_dotted(&mut t, "run.motor.x", Value::Float(1.0)).unwrap_err();
+        assert!(e.contains("'run.motor' is a float"), "{e}");
+        assert!(set_dotted(&mut t, "run..x", Value::Float(1.0)).is_err());
+        assert!(set_dotted(&mut t, "", Value::Float(1.0)).is_err());
+    }
+
+    #[test]
+    fn progress_bar_text() {
+        let s = progress_bar(10, 40, Duration::from_secs(30));
+        assert_eq!(
+            s,
+            "sweep  [######..................] 10/40  25%  0:30 elapsed  ~1:30 left"
+        );
+        let s = progress_bar(40, 40, Duration::from_secs(3725));
+        assert!(s.contains("[########################] 40/40 100%  1:02:05 elapsed"));
+        assert!(!s.contains("left"));
+        assert!(progress_bar(0, 0, Duration::ZERO).contains("0/1"));
+    }
+
+    fn base(name: &str) -> Result<(Table, String), String> {
+        match name {
+            "b" => Ok((
+                "[run]\nmotor = 12.0\nload = 800.0\n".parse().unwrap(),
+                "built-in b".into(),
+            )),
+            _ => Err("no such base".into()),
+        }
+    }
+
+    const GOOD: &str = r#"
+base = "b"
+[set]
+"run.t_end" = 0.3
+[[axis]]
+key = "converter.mass"
+label = "mass, kg"
+values = [20, 40.0]
+[[axis]]
+key = "run.drive"
+values = ["cw", "ccw"]
+[[axis]]
+key = "run.motor"
+from = 8.0
+to = 16.0
+steps = 3
+[[heatmap]]
+metric = "load_power"
+x = "run.motor"
+"#;
+
+    #[test]
+    fn sweep_file() {
+        let s = parse_sweep(GOOD, "s.toml", base).unwrap();
+        assert_eq!(s.base_origin, "built-in b");
+        assert_eq!(s.axes.len(), 3);
+        assert_eq!(s.axes[0].numbers(), Some(vec![20.0, 40.0]));
+        assert_eq!(s.axes[1].numbers(), None);
+        assert_eq!(s.axes[2].numbers(), Some(vec![8.0, 12.0, 16.0]));
+        // y defaults to the first other numeric axis: the drive axis is skipped.
+        assert_eq!(
+            s.heatmaps,
+            [HeatSpec {
+                metric: Metric::LoadPower,
+                x: 2,
+                y: Some(0)
+            }]
+        );
+        let v = s.variants().unwrap();
+        assert_eq!(v.len(), 12);
+        let (idx, tree) = &v[7];
+        assert_eq!(idx, &[1, 0, 1]);
+        assert_eq!(tree["run"]["t_end"].as_float(), Some(0.3));
+        assert_eq!(tree["run"]["load"].as_float(), Some(800.0));
+        assert_eq!(tree["run"]["motor"].as_float(), Some(12.0));
+        assert_eq!(tree["run"]["drive"].as_str(), Some("cw"));
+        assert_eq!(tree["converter"]["mass"].as_float(), Some(40.0));
+        assert_eq!(
+            s.describe(idx),
+            "converter.mass = 40, run.drive = cw, run.motor = 12"
+        );
+        // The default heat-map: first breakaway over the first two numeric axes.
+        let plain = GOOD.split("[[heatmap]]").next().unwrap();
+        let s = parse_sweep(plain, "s.toml", base).unwrap();
+        assert_eq!(
+            s.heatmaps,
+            [HeatSpec {
+                metric: Metric::FirstBreakaway,
+                x: 0,
+                y: Some(2)
+            }]
+        );
+    }
+
+    #[test]
+    fn bad_sweep_files_say_what_is_wrong() {
+        let cases: [(&str, &str); 11] = [
+            ("base = \"nope\"", "base = 'nope': no such base"),
+            ("base = \"b\"\nbogus = 1", "unknown field `bogus`"),
+            ("base = 1", "invalid type"),
+            (
+                "base = \"b\"\n[set]\n\"run.motor.x\" = 1",
+                "[set] key 'run.motor.x': 'run.motor' is a float",
+            ),
+            (
+                "base = \"b\"\n[[axis]]\nkey = \"a\"\nvalues = []",
+                "axis 1 ('a'): values: empty",
+            ),
+            (
+                "base = \"b\"\n[[axis]]\nkey = \"a\"\nfrom = 1.0\nto = 2.0",
+                "give either values",
+            ),
+            (
+                "base = \"b\"\n[[axis]]\nkey = \"a\"\nfrom = 1.0\nto = 2.0\nsteps = 1",
+                "axis 1 ('a'): steps = 1",
+            ),
+            (
+                "base = \"b\"\n[[axis]]\nkey = \"a\"\nvalues = [1]\n[[axis]]\nkey = \"a\"\nvalues = [2]",
+                "axis 2 ('a'): the key is already an axis",
+            ),
+            (
+                "base = \"b\"\n[[axis]]\nkey = \"a\"\nvalues = [1]\n[[heatmap]]\nmetric = \"speed\"",
+                "metric = 'speed': unknown (known: time, first_breakaway",
+            ),
+            (
+                "base = \"b\"\n[[axis]]\nkey = \"a\"\nvalues = [\"x\"]\n[[heatmap]]\nmetric = \"time\"\nx = \"a\"",
+                "x = 'a': the axis has values that are not numbers",
+            ),
+            (
+                "base = \"b\"\nthreads = 0",
+                "threads = 0: must be 1..=",
+            ),
+        ];
+        for (text, want) in cases {
+            let e = parse_sweep(text, "s.toml", base).unwrap_err().to_string();
+            assert!(e.starts_with("s.toml: "), "{e}");
+            assert!(e.contains(want), "{text:?}: {e:?} lacks {want:?}");
+            assert!(!e.contains('\n'), "{e:?}");
+        }
+        let big = "base = \"b\"\n[[axis]]\nkey = \"a\"\nfrom = 0.0\nto = 1.0\nsteps = 1000\n[[axis]]\nkey = \"b\"\nfrom = 0.0\nto = 1.0\nsteps = 11";
+        let e = parse_sweep(big, "s.toml", base).unwrap_err().to_string();
+        assert!(e.contains("more than 10000 variants"), "{e}");
+    }
+
+    #[test]
+    fn metric_names_round_trip() {
+        for m in Metric::ALL {
+            assert_eq!(Metric::from_name(m.name()), Some(m));
+        }
+        assert_eq!(Metric::from_name("nope"), None);
+        let mut o = Outcome::default();
+        o.metrics[1] = Some(0.25);
+        assert_eq!(o.get(Metric::FirstBreakaway), Some(0.25));
+        assert_eq!(o.get(Metric::Time), None);
+    }
+}
