@@ -323,7 +323,7 @@ pub fn write_table(w: &mut dyn Write, runs: &[BatchRun], outcomes: &[Outcome]) -
 
 /// A CSV cell: quoted (with inner quotes doubled) when it holds a comma, a quote or a
 /// line break (error messages name groups like `RRR(5,6)`).
-fn cell(s: &str) -> Cow<'_, str> {
+pub(crate) fn cell(s: &str) -> Cow<'_, str> {
     if s.contains([',', '"', '\n', '\r']) {
         Cow::Owned(format!("\"{}\"", s.replace('"', "\"\"")))
     } else {

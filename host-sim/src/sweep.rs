@@ -35,7 +35,10 @@
 //! and pictures are written from the results in that order, after all have run. Only
 //! the progress bar on `stderr` depends on the finishing order.
 
+use crate::batch::{self, cell};
+use crate::run::RunError;
 use std::fmt;
+use std::io::{self, Write};
 use std::time::Duration;
 use toml::{Table, Value};
 
@@ -186,6 +189,166 @@ impl Outcome {
         let k = Metric::ALL.iter().position(|x| *x == m)?;
         self.metrics.get(k).copied().flatten()
     }
+}
+
+impl From<&batch::Outcome> for Outcome {
+    /// The table's view of a run's outcome (the same exit status, end and message as
+    /// `host-sim batch` gives it).
+    fn from(o: &batch::Outcome) -> Self {
+        let mut metrics = [None; Metric::ALL.len()];
+        let mut put = |m: Metric, v: f64| {
+            if let Some(k) = Metric::ALL.iter().position(|x| *x == m) {
+                metrics[k] = Some(v);
+            }
+        };
+        let steps = match o {
+            batch::Outcome::Mechanism(Ok(s)) => {
+                put(Metric::Time, s.time);
+                Some(s.steps)
+            }
+            batch::Outcome::Mechanism(Err(RunError::Step { steps, .. })) => Some(*steps),
+            batch::Outcome::Converter(Ok(s)) => {
+                let a = &s.audit;
+                put(Metric::Time, s.time);
+                if let Some((t, _)) = s.first_breakaway {
+                    put(Metric::FirstBreakaway, t);
+                }
+                put(Metric::Events, s.event_count() as f64);
+                put(Metric::Switches, s.switches as f64);
+                put(Metric::ShaftAngle, s.shaft_angle);
+                put(Metric::MotorWork, a.motor_work);
+                put(Metric::LoadWork, a.load_work);
+                if s.time > 0.0 {
+                    put(Metric::LoadPower, a.load_work / s.time);
+                }
+                put(Metric::ImpactLoss, a.impact_loss);
+                Some(s.steps)
+            }
+            batch::Outcome::Mechanism(Err(_)) | batch::Outcome::Converter(Err(_)) => None,
+        };
+        Outcome {
+            exit: o.exit_code(),
+            end: o.end(),
+            steps,
+            metrics,
+            message: o.message(),
+        }
+    }
+}
+
+/// Writes `sweep.csv`: the header (`job`, the axes' keys, `exit`, `end`, `steps`, the
+/// metrics in [`Metric::ALL`] order, `message`), then one row per variant in grid
+/// order. Numbers in shortest round-trip form; no wall times, so the table depends on
+/// nothing but the runs.
+pub fn write_table(
+    w: &mut dyn Write,
+    sweep: &Sweep,
+    variants: &[Vec<usize>],
+    outcomes: &[Outcome],
+) -> io::Result<()> {
+    let mut header: Vec<&str> = vec!["job"];
+    header.extend(sweep.axes.iter().map(|a| a.key.as_str()));
+    header.extend(["exit", "end", "steps"]);
+    header.extend(Metric::ALL.map(Metric::name));
+    header.push("message");
+    writeln!(
+        w,
+        "{}",
+        header.iter().map(|h| cell(h)).collect::<Vec<_>>().join(",")
+    )?;
+    for (job, (idx, o)) in variants.iter().zip(outcomes).enumerate() {
+        let mut row = vec![job.to_string()];
+        for (a, &i) in sweep.axes.iter().zip(idx) {
+            row.push(cell(&a.values.get(i).map(show).unwrap_or_default()).into_owned());
+        }
+        row.push(o.exit.to_string());
+        row.push(o.end.to_string());
+        row.push(o.steps.map(|s| s.to_string()).unwrap_or_default());
+        for m in o.metrics {
+            row.push(m.map(|v| v.to_string()).unwrap_or_default());
+        }
+        row.push(cell(o.message.as_deref().unwrap_or("")).into_owned());
+        writeln!(w, "{}", row.join(","))?;
+    }
+    Ok(())
+}
+
+/// One heat-map's data: `spec.metric` over the x and y axes, for one combination of
+/// the values of the other axes.
+#[derive(Clone, Debug, PartialEq)]
+pub struct HeatGrid {
+    /// The other axes' values, `key = value, ...` (empty when there are none).
+    pub fixed: String,
+    /// The x axis's values.
+    pub x: Vec<f64>,
+    /// The y axis's values (one row, `[0.0]`, without a y axis).
+    pub y: Vec<f64>,
+    /// Row-major `z[iy * x.len() + ix]`; `None` where the run gave no value.
+    pub z: Vec<Option<f64>>,
+}
+
+/// The heat-maps of `spec`: one per combination of the other axes' values, in grid
+/// order. `variants[k]` (the axis indices, as [`Sweep::variants`] gives them) had
+/// `outcomes[k]`.
+pub fn heat_grids(
+    sweep: &Sweep,
+    spec: &HeatSpec,
+    variants: &[Vec<usize>],
+    outcomes: &[Outcome],
+) -> Vec<HeatGrid> {
+    let axis_numbers = |k: usize| {
+        sweep
+            .axes
+            .get(k)
+            .and_then(Axis::numbers)
+            .unwrap_or_default()
+    };
+    let x = axis_numbers(spec.x);
+    let y = spec.y.map_or_else(|| vec![0.0], axis_numbers);
+    let others: Vec<usize> = (0..sweep.axes.len())
+        .filter(|&k| k != spec.x && Some(k) != spec.y)
+        .collect();
+    let mut grids: Vec<(Vec<usize>, HeatGrid)> = Vec::new();
+    for (idx, o) in variants.iter().zip(outcomes) {
+        let key: Vec<usize> = others
+            .iter()
+            .map(|&k| idx.get(k).copied().unwrap_or(0))
+            .collect();
+        let g = match grids.iter().position(|(k, _)| *k == key) {
+            Some(p) => &mut grids[p].1,
+            None => {
+                let fixed = others
+                    .iter()
+                    .zip(&key)
+                    .map(|(&a, &i)| {
+                        let axis = &sweep.axes[a];
+                        format!(
+                            "{} = {}",
+                            axis.key,
+                            axis.values.get(i).map(show).unwrap_or_default()
+                        )
+                    })
+                    .collect::<Vec<_>>()
+                    .join(", ");
+                grids.push((
+                    key,
+                    HeatGrid {
+                        fixed,
+                        x: x.clone(),
+                        y: y.clone(),
+                        z: vec![None; x.len() * y.len()],
+                    },
+                ));
+                &mut grids.last_mut().expect("just pushed").1
+            }
+        };
+        let ix = idx.get(spec.x).copied().unwrap_or(0);
+        let iy = spec.y.and_then(|k| idx.get(k).copied()).unwrap_or(0);
+        if let Some(cell) = g.z.get_mut(iy * g.x.len() + ix) {
+            *cell = o.get(spec.metric);
+        }
+    }
+    grids.into_iter().map(|(_, g)| g).collect()
 }
 
 /// The grid's variants: for each, the index of its value on every axis; the first
@@ -789,6 +952,39 @@ x = "run.motor"
         let big = "base = \"b\"\n[[axis]]\nkey = \"a\"\nfrom = 0.0\nto = 1.0\nsteps = 1000\n[[axis]]\nkey = \"b\"\nfrom = 0.0\nto = 1.0\nsteps = 11";
         let e = parse_sweep(big, "s.toml", base).unwrap_err().to_string();
         assert!(e.contains("more than 10000 variants"), "{e}");
+    }
+
+    #[test]
+    fn heat_grids_per_fixed_value() {
+        let s = parse_sweep(GOOD, "s.toml", base).unwrap();
+        let v: Vec<Vec<usize>> = s.variants().unwrap().into_iter().map(|v| v.0).collect();
+        // Each variant's load power is a code of its axis indices, so every cell shows
+        // where it came from.
+        let outcomes: Vec<Outcome> = v
+            .iter()
+            .map(|idx| {
+                let mut o = Outcome::default();
+                let code = (100 * idx[0] + 10 * idx[1] + idx[2]) as f64;
+                o.metrics[7] = if code == 112.0 { None } else { Some(code) };
+                o
+            })
+            .collect();
+        let g = heat_grids(&s, &s.heatmaps[0], &v, &outcomes);
+        assert_eq!(g.len(), 2);
+        assert_eq!(g[0].fixed, "run.drive = cw");
+        assert_eq!(g[1].fixed, "run.drive = ccw");
+        assert_eq!(g[0].x, [8.0, 12.0, 16.0]);
+        assert_eq!(g[0].y, [20.0, 40.0]);
+        let z = |c: &[Option<f64>]| c.iter().map(|x| x.map(|v| v as i64)).collect::<Vec<_>>();
+        // Row iy = the mass index, column ix = the motor index.
+        assert_eq!(
+            z(&g[0].z),
+            [Some(0), Some(1), Some(2), Some(100), Some(101), Some(102)]
+        );
+        assert_eq!(
+            z(&g[1].z),
+            [Some(10), Some(11), Some(12), Some(110), Some(111), None]
+        );
     }
 
     #[test]
