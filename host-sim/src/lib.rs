@@ -30,6 +30,7 @@ pub mod batch;
 pub mod ccc;
 pub mod cli;
 pub mod columns;
+pub mod draw;
 pub mod run;
 pub mod scenarios;
 
