@@ -543,7 +543,7 @@ pub fn simulate_with<T: Real>(
         // The last good state before a failed step.
         write_row(out, &twin).map_err(csv_err)?;
         rows += 1;
-        if let Some(r) = rec.as_deref_mut() {
+        if let Some(r) = rec {
             r.converter_row(&twin);
         }
     }

@@ -16,6 +16,11 @@
 //! any N and the same as each run alone ([`batch`]). Its job runner, [`run_jobs`], runs
 //! any slice of jobs on N threads and returns the results in job order.
 //!
+//! Pictures: `host-sim run ... --plot DIR` draws the run's plots (SVG and PNG),
+//! `--animate FILE.svg|FILE.gif` animates the mechanism ([`pictures`], [`plot`],
+//! [`animate`]); `host-sim plot RUN.csv --out-dir DIR` plots a CSV a run wrote; [`draw`]
+//! renders figures (and heat maps of sweeps) to SVG and PNG.
+//!
 //! The output is deterministic: the same command writes the same bytes on every run,
 //! in debug and release builds, on 1 or N threads (the core's math is `libm`; the
 //! golden SHA-256 hashes of every built-in scenario's CSV are pinned in

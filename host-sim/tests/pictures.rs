@@ -235,6 +235,37 @@ fn mechanism_plots_and_animation() {
     // 0.5 s at 10 frames a second: frames at 0, 0.1, ..., 0.5.
     let frames = gif_frames(&read(Path::new(&gif)));
     assert_eq!(frames, 6);
+    // Every frame of both mechanisms: each crank's first point stays on its ground
+    // pivot (the mechanisms' description: crank 1 turns about ground point 0).
+    for scenario in [ScenarioId::FiveBar, ScenarioId::SliderCrank] {
+        let frames = mechanism_frames(scenario, 1.0);
+        assert_eq!(frames.frames.len(), 11, "{scenario:?}");
+        let a = frames.ground[0];
+        for fr in &frames.frames {
+            let p = fr.links[0].points[0];
+            assert!(
+                (p[0] - a[0]).abs() < 1e-12 && (p[1] - a[1]).abs() < 1e-12,
+                "{p:?} vs {a:?}"
+            );
+        }
+        if let Ok(dir) = std::env::var("PICTURES_DIR") {
+            let path = Path::new(&dir).join(format!("{}-frame-05.png", scenario.name()));
+            animate::write_frame(&frames, 5, &path).expect("frame");
+        }
+    }
+}
+
+/// A mechanism scenario over `t_end` s with a frame every 0.1 s.
+fn mechanism_frames(scenario: ScenarioId, t_end: f64) -> Frames {
+    let mut opts = RunOptions::new(scenario);
+    opts.t_end = Some(t_end);
+    let mut rec = Recorder {
+        table: None,
+        frames: Some(Frames::new(scenario.name(), 10, 1.0)),
+    };
+    host_sim::run::simulate_with::<f64>(&opts, &mut Vec::new(), "memory", Some(&mut rec))
+        .expect("runs");
+    rec.frames.expect("frames")
 }
 
 /// Frames of a GIF, decoded by the `gif` crate (its screen must be the frame size).

@@ -96,6 +96,10 @@ fn text_open(t: &Text) -> String {
     if t.bold {
         o.push_str(" font-weight=\"bold\"");
     }
+    if t.text.contains("  ") {
+        // Keep runs of spaces (aligned columns in captions).
+        o.push_str(" xml:space=\"preserve\"");
+    }
     if t.vertical {
         let _ = write!(
             o,
