@@ -166,6 +166,15 @@ fn parse_line(args: &[&str]) -> Result<RunOptions, String> {
             "{a}: not in a batch (the batch names each run's files in --out-dir)"
         ));
     }
+    if let Some(a) = args.iter().find(|a| {
+        ["--plot", "--animate", "--fps", "--slow"]
+            .iter()
+            .any(|o| **a == *o || a.starts_with(&format!("{o}=")))
+    }) {
+        return Err(format!(
+            "{a}: not in a batch (draw a job's pictures with host-sim plot or run)"
+        ));
+    }
     match parse_args(std::iter::once("run").chain(args.iter().copied())) {
         Ok(Command::Run(opts)) => {
             Steps::check(&opts).map_err(|e| e.to_string())?;

@@ -8,6 +8,7 @@
 //! rows and log lines before it are written and the summary is printed.
 
 use crate::cli::{Output, RunOptions};
+use crate::pictures::Recorder;
 use crate::run::{precision, RunError, Steps};
 use crate::scenarios::ScenarioId;
 use std::fmt;
@@ -401,7 +402,18 @@ impl fmt::Display for CccSummary {
 pub fn simulate<T: Real>(
     opts: &RunOptions,
     csv: Sink<'_>,
+    logs: Option<(Sink<'_>, Sink<'_>)>,
+) -> Result<CccSummary, RunError> {
+    simulate_with::<T>(opts, csv, logs, None)
+}
+
+/// [`simulate`], feeding `rec` (the pictures' recorder) every written row and every
+/// state.
+pub fn simulate_with<T: Real>(
+    opts: &RunOptions,
+    csv: Sink<'_>,
     mut logs: Option<(Sink<'_>, Sink<'_>)>,
+    mut rec: Option<&mut Recorder>,
 ) -> Result<CccSummary, RunError> {
     let precision = precision::<T>();
     let name = opts.scenario.name();
@@ -496,6 +508,10 @@ pub fn simulate<T: Real>(
         };
     record(&twin, &mut logs)?;
     write_row(out, &twin).map_err(csv_err)?;
+    if let Some(r) = rec.as_deref_mut() {
+        r.converter_row(&twin);
+        r.converter_state(&twin);
+    }
     let mut rows = 1u64;
     let mut written = 0u64;
     let mut steps = 0u64;
@@ -511,16 +527,25 @@ pub fn simulate<T: Real>(
         }
         steps += 1;
         record(&twin, &mut logs)?;
+        if let Some(r) = rec.as_deref_mut() {
+            r.converter_state(&twin);
+        }
         if steps % every == 0 || steps == n {
             write_row(out, &twin).map_err(csv_err)?;
             rows += 1;
             written = steps;
+            if let Some(r) = rec.as_deref_mut() {
+                r.converter_row(&twin);
+            }
         }
     }
     if written != steps {
         // The last good state before a failed step.
         write_row(out, &twin).map_err(csv_err)?;
         rows += 1;
+        if let Some(r) = rec {
+            r.converter_row(&twin);
+        }
     }
     out.flush().map_err(csv_err)?;
     let log_names = match logs.as_mut() {
@@ -622,6 +647,10 @@ pub fn write_row<T: Real>(w: &mut dyn Write, twin: &Twin<T>) -> io::Result<()> {
 /// to it) or `stdout` (no logs), the summary to the other stream (unless quiet), a
 /// failed step's error to `stderr`; returns the exit code.
 pub fn execute(opts: &RunOptions, stdout: &mut dyn Write, stderr: &mut dyn Write) -> u8 {
+    if let Err(e) = crate::pictures::check(opts) {
+        return crate::report_run_error(e, stderr);
+    }
+    let mut rec = Recorder::for_options(opts);
     let result = match &opts.out {
         Output::Stdout => dispatch(
             opts,
@@ -630,10 +659,15 @@ pub fn execute(opts: &RunOptions, stdout: &mut dyn Write, stderr: &mut dyn Write
                 target: "stdout".into(),
             },
             None,
+            rec.as_mut(),
         )
         .map(|s| (s, false)),
-        Output::File(path) => run_to_files(opts, path).map(|s| (s, true)),
+        Output::File(path) => run_to_files_with(opts, path, rec.as_mut()).map(|s| (s, true)),
     };
+    let result = result.and_then(|r| match &rec {
+        Some(rec) => crate::pictures::write(opts, rec).map(|_| r),
+        None => Ok(r),
+    });
     match result {
         Ok((summary, to_stdout)) => {
             if !opts.quiet {
@@ -662,6 +696,15 @@ pub fn execute(opts: &RunOptions, stdout: &mut dyn Write, stderr: &mut dyn Write
 /// Runs the converter scenario of `opts` with its state CSV to the file `path` and the
 /// logs next to it ([`log_paths`]).
 pub(crate) fn run_to_files(opts: &RunOptions, path: &Path) -> Result<CccSummary, RunError> {
+    run_to_files_with(opts, path, None)
+}
+
+/// [`run_to_files`] feeding the pictures' recorder.
+fn run_to_files_with(
+    opts: &RunOptions,
+    path: &Path,
+    rec: Option<&mut Recorder>,
+) -> Result<CccSummary, RunError> {
     let (events, switches) = log_paths(path);
     let create = |p: &Path| {
         File::create(p)
@@ -690,6 +733,7 @@ pub(crate) fn run_to_files(opts: &RunOptions, path: &Path) -> Result<CccSummary,
                 target: switches.display().to_string(),
             },
         )),
+        rec,
     )
 }
 
@@ -697,11 +741,12 @@ fn dispatch(
     opts: &RunOptions,
     csv: Sink<'_>,
     logs: Option<(Sink<'_>, Sink<'_>)>,
+    rec: Option<&mut Recorder>,
 ) -> Result<CccSummary, RunError> {
     if opts.f32 {
-        simulate::<f32>(opts, csv, logs)
+        simulate_with::<f32>(opts, csv, logs, rec)
     } else {
-        simulate::<f64>(opts, csv, logs)
+        simulate_with::<f64>(opts, csv, logs, rec)
     }
 }
 

@@ -14,6 +14,8 @@ Usage:
   host-sim run <scenario> [options]  simulate a scenario and write CSV
   host-sim batch FILE --out-dir DIR [--threads N] [--quiet]
                                      run the runs listed in FILE, N at a time
+  host-sim plot RUN.csv --out-dir DIR
+                                     plot a CSV that host-sim run wrote (as --plot)
   host-sim help | --help | -h        show this help
 
 Scenarios: slider-crank, five-bar (mechanisms);
@@ -28,6 +30,16 @@ Options of run:
   --every N          write every N-th step (default 1); the row at t = 0 is always written
   --f32              run the core in single precision (f32)
   --quiet            no summary
+  --plot DIR         draw the run's plots into DIR (created if missing), each as .svg
+                     and .png: converter: crank, motor_torque, reactions, speeds,
+                     clutch_torques, mode, energy; mechanisms: coordinates, torques,
+                     reactions (the CSV's rows: --every thins them too)
+  --animate FILE     animate the mechanism: FILE.svg (animated SVG, plays in a
+                     browser) or FILE.gif; may be given twice (one .svg, one .gif)
+  --fps N            frames a second of the animation, 1..=50 (default 25)
+  --slow X           slow motion: the animation lasts X times the simulated time,
+                     0.01..=1000 (default 1); frames are taken every 1/(fps·X) s of
+                     simulated time, at most 5000 of them
   Values may also be given as --option=VALUE.
 
 Options of the converter scenarios only:
@@ -136,6 +148,14 @@ pub struct RunOptions {
     /// Converter scenarios: constant motor torque on the crank, N·m, CCW positive
     /// (`None`: the scenario's).
     pub motor: Option<f64>,
+    /// `--plot DIR`: where the plots go.
+    pub plot: Option<PathBuf>,
+    /// `--animate FILE`: the animations to write (`.svg`, `.gif`).
+    pub animate: Vec<PathBuf>,
+    /// `--fps`: frames a second of the animation.
+    pub fps: u32,
+    /// `--slow`: the animation lasts `slow` times the simulated time.
+    pub slow: f64,
 }
 
 impl RunOptions {
@@ -153,8 +173,21 @@ impl RunOptions {
             ccw: false,
             load: None,
             motor: None,
+            plot: None,
+            animate: Vec::new(),
+            fps: 25,
+            slow: 1.0,
         }
     }
+}
+
+/// Options of `host-sim plot`.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct PlotOptions {
+    /// The CSV a run wrote.
+    pub csv: PathBuf,
+    /// Where the plots go.
+    pub out_dir: PathBuf,
 }
 
 /// The most threads `host-sim batch --threads` takes (a guard against a typo that
@@ -185,6 +218,8 @@ pub enum Command {
     Run(RunOptions),
     /// `host-sim batch FILE --out-dir DIR [--threads N] [--quiet]`.
     Batch(BatchOptions),
+    /// `host-sim plot RUN.csv --out-dir DIR`.
+    Plot(PlotOptions),
 }
 
 /// A bad command line: the one-line message names the argument and what is wrong.
@@ -218,7 +253,9 @@ where
         }
     }
     let Some(command) = words.first() else {
-        return Err(usage_err("missing command (list, run, batch or help)"));
+        return Err(usage_err(
+            "missing command (list, run, batch, plot or help)",
+        ));
     };
     let rest = &words[1..];
     match command.as_str() {
@@ -230,11 +267,12 @@ where
         },
         "run" => parse_run(rest),
         "batch" => parse_batch(rest),
+        "plot" => parse_plot(rest),
         other if other.starts_with('-') => Err(usage_err(format!(
-            "unknown option '{other}' before the command (commands: list, run, batch, help)"
+            "unknown option '{other}' before the command (commands: list, run, batch, plot, help)"
         ))),
         other => Err(usage_err(format!(
-            "unknown command '{other}' (commands: list, run, batch, help)"
+            "unknown command '{other}' (commands: list, run, batch, plot, help)"
         ))),
     }
 }
@@ -285,6 +323,7 @@ fn parse_run(args: &[String]) -> Result<Command, UsageError> {
     let (mut h, mut t_end, mut every) = (None, None, 1);
     let (mut f32, mut quiet, mut ccw) = (false, false, false);
     let (mut load, mut motor) = (None, None);
+    let (mut plot, mut animate, mut fps, mut slow) = (None, Vec::new(), None, None);
     let mut k = 0;
     while k < args.len() {
         let arg = args[k].as_str();
@@ -328,6 +367,15 @@ fn parse_run(args: &[String]) -> Result<Command, UsageError> {
                     _ => every = parse_every(&value)?,
                 }
             }
+            "--plot" | "--animate" | "--fps" | "--slow" => {
+                let value = option_value(name, inline, args, &mut k)?;
+                match name {
+                    "--plot" => plot = Some(parse_path(name, &value)?),
+                    "--animate" => animate.push(parse_animation(&value, &animate)?),
+                    "--fps" => fps = Some(parse_fps(&value)?),
+                    _ => slow = Some(parse_slow(&value)?),
+                }
+            }
             _ => return Err(usage_err(format!("run: unknown option '{name}'"))),
         }
     }
@@ -338,6 +386,15 @@ fn parse_run(args: &[String]) -> Result<Command, UsageError> {
         ))
     })?;
     check_converter_options(scenario, ccw, load.is_some(), motor.is_some())?;
+    if animate.is_empty() {
+        if let Some(name) = [("--fps", fps.is_some()), ("--slow", slow.is_some())]
+            .iter()
+            .find_map(|(n, g)| g.then_some(*n))
+        {
+            return Err(usage_err(format!("{name}: only with --animate FILE")));
+        }
+    }
+    let defaults = RunOptions::new(scenario);
     Ok(Command::Run(RunOptions {
         scenario,
         out,
@@ -349,7 +406,96 @@ fn parse_run(args: &[String]) -> Result<Command, UsageError> {
         ccw,
         load,
         motor,
+        plot,
+        animate,
+        fps: fps.unwrap_or(defaults.fps),
+        slow: slow.unwrap_or(defaults.slow),
     }))
+}
+
+fn parse_plot(args: &[String]) -> Result<Command, UsageError> {
+    let (mut csv, mut out_dir) = (None, None);
+    let mut k = 0;
+    while k < args.len() {
+        let arg = args[k].as_str();
+        k += 1;
+        if is_help(arg) {
+            return Ok(Command::Help);
+        }
+        if arg == "-" || !arg.starts_with('-') {
+            if csv.is_some() {
+                return Err(usage_err(format!(
+                    "plot: unexpected argument '{arg}' (one CSV)"
+                )));
+            }
+            csv = Some(parse_path("plot", arg)?);
+            continue;
+        }
+        let (name, inline) = split_option(arg);
+        match name {
+            "--out-dir" => {
+                out_dir = Some(parse_path(
+                    name,
+                    &option_value(name, inline, args, &mut k)?,
+                )?)
+            }
+            _ => return Err(usage_err(format!("plot: unknown option '{name}'"))),
+        }
+    }
+    Ok(Command::Plot(PlotOptions {
+        csv: csv.ok_or_else(|| usage_err("plot: missing CSV file"))?,
+        out_dir: out_dir.ok_or_else(|| usage_err("plot: missing --out-dir DIR"))?,
+    }))
+}
+
+/// A file or directory name: not empty.
+fn parse_path(name: &str, value: &str) -> Result<PathBuf, UsageError> {
+    if value.is_empty() {
+        return Err(usage_err(format!("{name}: empty file name")));
+    }
+    Ok(PathBuf::from(value))
+}
+
+/// An animation file: `.svg` or `.gif`, at most one of each.
+fn parse_animation(value: &str, given: &[PathBuf]) -> Result<PathBuf, UsageError> {
+    let path = parse_path("--animate", value)?;
+    let format = crate::animate::AnimFormat::of(&path).map_err(usage_err)?;
+    if given
+        .iter()
+        .any(|p| crate::animate::AnimFormat::of(p) == Ok(format))
+    {
+        return Err(usage_err(format!(
+            "--animate: '{value}': one .svg and one .gif at most"
+        )));
+    }
+    Ok(path)
+}
+
+fn parse_fps(value: &str) -> Result<u32, UsageError> {
+    let (lo, hi) = crate::animate::FPS_RANGE;
+    let n: u32 = value.trim().parse().map_err(|_| {
+        usage_err(format!(
+            "--fps: '{value}' is not a whole number ({lo}..={hi} expected)"
+        ))
+    })?;
+    if !(lo..=hi).contains(&n) {
+        return Err(usage_err(format!(
+            "--fps: {n} is out of range ({lo}..={hi} frames a second)"
+        )));
+    }
+    Ok(n)
+}
+
+fn parse_slow(value: &str) -> Result<f64, UsageError> {
+    let (lo, hi) = crate::animate::SLOW_RANGE;
+    let what = format!("a slow-motion factor {lo}..={hi}");
+    let x = parse_finite("--slow", value, &what)?;
+    if !(lo..=hi).contains(&x) {
+        return Err(usage_err(format!(
+            "--slow: {value} is out of range ({what} expected)"
+        )));
+    }
+    Ok(x)
 }
 
 fn parse_batch(args: &[String]) -> Result<Command, UsageError> {

@@ -16,6 +16,11 @@
 //! any N and the same as each run alone ([`batch`]). Its job runner, [`run_jobs`], runs
 //! any slice of jobs on N threads and returns the results in job order.
 //!
+//! Pictures: `host-sim run ... --plot DIR` draws the run's plots (SVG and PNG),
+//! `--animate FILE.svg|FILE.gif` animates the mechanism ([`pictures`], [`plot`],
+//! [`animate`]); `host-sim plot RUN.csv --out-dir DIR` plots a CSV a run wrote; [`draw`]
+//! renders figures (and heat maps of sweeps) to SVG and PNG.
+//!
 //! The output is deterministic: the same command writes the same bytes on every run,
 //! in debug and release builds, on 1 or N threads (the core's math is `libm`; the
 //! golden SHA-256 hashes of every built-in scenario's CSV are pinned in
@@ -26,17 +31,23 @@
 
 #![warn(missing_docs)]
 
+pub mod animate;
 pub mod batch;
 pub mod ccc;
 pub mod cli;
 pub mod columns;
+pub mod draw;
+pub mod pictures;
+pub mod plot;
 pub mod run;
 pub mod scenarios;
 pub mod sweep;
 
 pub use batch::{run_jobs, Progress};
 pub use ccc::{CccScenario, CccSummary, End};
-pub use cli::{parse_args, BatchOptions, Command, Output, RunOptions, UsageError, HINT, USAGE};
+pub use cli::{
+    parse_args, BatchOptions, Command, Output, PlotOptions, RunOptions, UsageError, HINT, USAGE,
+};
 pub use columns::{Column, Layout};
 pub use run::{simulate, step_count, MaxReaction, MeanSpeed, RunError, Steps, Summary, MAX_STEPS};
 pub use scenarios::ScenarioId;
@@ -74,6 +85,7 @@ where
         },
         Ok(Command::Run(opts)) => execute(&opts, stdout, stderr),
         Ok(Command::Batch(opts)) => batch::execute(&opts, stdout, stderr),
+        Ok(Command::Plot(opts)) => pictures::plot_csv(&opts, stdout, stderr),
         Err(e) => {
             let _ = writeln!(stderr, "host-sim: {e}\n{HINT}");
             EXIT_USAGE
@@ -124,10 +136,18 @@ pub fn execute(opts: &RunOptions, stdout: &mut dyn Write, stderr: &mut dyn Write
     if opts.scenario.is_converter() {
         return ccc::execute(opts, stdout, stderr);
     }
+    if let Err(e) = pictures::check(opts) {
+        return report_run_error(e, stderr);
+    }
+    let mut rec = pictures::Recorder::for_options(opts);
     let result = match &opts.out {
-        Output::Stdout => dispatch(opts, stdout, "stdout").map(|s| (s, false)),
-        Output::File(path) => run_to_file(opts, path).map(|s| (s, true)),
+        Output::Stdout => dispatch(opts, stdout, "stdout", rec.as_mut()).map(|s| (s, false)),
+        Output::File(path) => run_to_file_with(opts, path, rec.as_mut()).map(|s| (s, true)),
     };
+    let result = result.and_then(|r| match &rec {
+        Some(rec) => pictures::write(opts, rec).map(|_| r),
+        None => Ok(r),
+    });
     match result {
         Ok((summary, to_stdout)) => {
             if !opts.quiet {
@@ -162,18 +182,31 @@ pub(crate) fn report_run_error(e: RunError, stderr: &mut dyn Write) -> u8 {
 
 /// Runs the mechanism scenario of `opts` with its CSV to the file `path`.
 pub(crate) fn run_to_file(opts: &RunOptions, path: &Path) -> Result<Summary, RunError> {
+    run_to_file_with(opts, path, None)
+}
+
+fn run_to_file_with(
+    opts: &RunOptions,
+    path: &Path,
+    rec: Option<&mut pictures::Recorder>,
+) -> Result<Summary, RunError> {
     let target = path.display().to_string();
     match File::create(path) {
-        Ok(f) => dispatch(opts, &mut BufWriter::new(f), &target),
+        Ok(f) => dispatch(opts, &mut BufWriter::new(f), &target, rec),
         Err(error) => Err(RunError::Write { target, error }),
     }
 }
 
-fn dispatch(opts: &RunOptions, csv: &mut dyn Write, target: &str) -> Result<Summary, RunError> {
+fn dispatch(
+    opts: &RunOptions,
+    csv: &mut dyn Write,
+    target: &str,
+    rec: Option<&mut pictures::Recorder>,
+) -> Result<Summary, RunError> {
     if opts.f32 {
-        simulate::<f32>(opts, csv, target)
+        run::simulate_with::<f32>(opts, csv, target, rec)
     } else {
-        simulate::<f64>(opts, csv, target)
+        run::simulate_with::<f64>(opts, csv, target, rec)
     }
 }
 

@@ -2,6 +2,7 @@
 
 use crate::cli::{RunOptions, UsageError};
 use crate::columns::Layout;
+use crate::pictures::Recorder;
 use crate::scenarios::ScenarioId;
 use std::fmt;
 use std::io::{self, Write};
@@ -332,6 +333,17 @@ pub fn simulate<T: Real>(
     csv: &mut dyn Write,
     target: &str,
 ) -> Result<Summary, RunError> {
+    simulate_with::<T>(opts, csv, target, None)
+}
+
+/// [`simulate`], feeding `rec` (the pictures' recorder) every written row and every
+/// state.
+pub fn simulate_with<T: Real>(
+    opts: &RunOptions,
+    csv: &mut dyn Write,
+    target: &str,
+    mut rec: Option<&mut Recorder>,
+) -> Result<Summary, RunError> {
     let precision = precision::<T>();
     let not_a_mechanism = || {
         RunError::Setup(format!(
@@ -402,9 +414,15 @@ pub fn simulate<T: Real>(
             count += 1;
             from.get_or_insert(sim.time().to_f64());
         }
+        if let Some(r) = rec.as_deref_mut() {
+            r.mechanism_state(&sim);
+        }
         if steps % every == 0 {
             layout.write_row(csv, &sim).map_err(write_err)?;
             rows += 1;
+            if let Some(r) = rec.as_deref_mut() {
+                r.mechanism_row(&layout, &sim);
+            }
         }
         if steps == n {
             break Ok(());
