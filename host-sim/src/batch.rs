@@ -20,7 +20,7 @@
 use crate::ccc::{self, CccSummary, End};
 use crate::cli::{parse_args, BatchOptions, Command, RunOptions, HINT};
 use crate::run::{RunError, Steps, Summary};
-use crate::scenarios::ScenarioId;
+use crate::scenarios::Source;
 use std::borrow::Cow;
 use std::fmt;
 use std::fs::{self, File};
@@ -178,10 +178,10 @@ fn parse_line(args: &[&str]) -> Result<RunOptions, String> {
 
 /// The CSV file name of job `job` of `total`: the index with at least 3 digits (as
 /// many as the last index needs, so that the names sort in job order) and the
-/// scenario, e.g. `003-ccc-s2.csv`.
-pub fn file_name(job: usize, total: usize, scenario: ScenarioId) -> String {
+/// scenario (a run file: its stem), e.g. `003-ccc-s2.csv`.
+pub fn file_name(job: usize, total: usize, scenario: &Source) -> String {
     let width = total.saturating_sub(1).to_string().len().max(3);
-    format!("{job:0width$}-{}.csv", scenario.name())
+    format!("{job:0width$}-{}.csv", scenario.label())
 }
 
 /// What one run of a batch did.
@@ -309,7 +309,7 @@ pub fn write_table(w: &mut dyn Write, runs: &[BatchRun], outcomes: &[Outcome]) -
             run.line,
             run.opts.scenario.name(),
             cell(&run.args.join(" ")),
-            cell(&file_name(job, total, run.opts.scenario)),
+            cell(&file_name(job, total, &run.opts.scenario)),
             outcome.exit_code(),
             outcome.end()
         )?;
@@ -375,7 +375,7 @@ pub fn execute(opts: &BatchOptions, stdout: &mut dyn Write, stderr: &mut dyn Wri
         |job, run: &BatchRun| {
             run_one(
                 &run.opts,
-                &dir.join(file_name(job, total, run.opts.scenario)),
+                &dir.join(file_name(job, total, &run.opts.scenario)),
             )
         },
         |p, outcome| {
