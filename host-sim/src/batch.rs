@@ -541,13 +541,25 @@ run five-bar
 
     #[test]
     fn file_names_sort_in_job_order() {
-        assert_eq!(file_name(3, 10, ScenarioId::CccS2), "003-ccc-s2.csv");
-        assert_eq!(file_name(7, 1000, ScenarioId::FiveBar), "007-five-bar.csv");
-        assert_eq!(file_name(7, 1001, ScenarioId::FiveBar), "0007-five-bar.csv");
+        use crate::ScenarioId;
+        let s = |id: ScenarioId| Source::from(id);
+        assert_eq!(file_name(3, 10, &s(ScenarioId::CccS2)), "003-ccc-s2.csv");
         assert_eq!(
-            file_name(0, 0, ScenarioId::SliderCrank),
+            file_name(7, 1000, &s(ScenarioId::FiveBar)),
+            "007-five-bar.csv"
+        );
+        assert_eq!(
+            file_name(7, 1001, &s(ScenarioId::FiveBar)),
+            "0007-five-bar.csv"
+        );
+        assert_eq!(
+            file_name(0, 0, &s(ScenarioId::SliderCrank)),
             "000-slider-crank.csv"
         );
+        // A run file's runs are named by its stem.
+        let file = ScenarioId::FiveBar.run_file().unwrap();
+        let f = Source::from_file("dir/my-linkage.toml", file);
+        assert_eq!(file_name(2, 3, &f), "002-my-linkage.csv");
     }
 
     #[test]
