@@ -333,7 +333,7 @@ pub fn analyze(m: &Mechanism) -> Result<Analysis, AnalysisError> {
         .collect();
     if s.known.iter().any(|k| !k) {
         return Err(AnalysisError::Leftover {
-            placed: groups.iter().map(|g| name(g)).collect(),
+            placed: groups.iter().map(name).collect(),
             links: (1..=n)
                 .filter(|&b| !s.known[b])
                 .map(|b| m.body_name(b))

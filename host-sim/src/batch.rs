@@ -185,6 +185,9 @@ pub fn file_name(job: usize, total: usize, scenario: &Source) -> String {
 }
 
 /// What one run of a batch did.
+// One per job, gathered once: the size difference of the summaries (a converter's
+// carries its motor law and settings) costs nothing worth a box.
+#[allow(clippy::large_enum_variant)]
 #[derive(Debug)]
 pub enum Outcome {
     /// A mechanism scenario: its summary, or why it failed.

@@ -23,7 +23,7 @@ use structomat::Real;
 
 /// A converter scenario's settings (SPEC 3), after the command-line overrides: its run
 /// file's `[converter]` and `[run]` ([`crate::runfile::Converter`]).
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct CccScenario {
     /// `false`: free mode, no clutch (S1).
     pub clutch: bool,
@@ -38,7 +38,7 @@ pub struct CccScenario {
     /// Default simulated time, s.
     pub t_end: f64,
     /// The file's converter: every parameter and the initial state.
-    pub converter: Converter,
+    pub converter: Box<Converter>,
 }
 
 impl CccScenario {
@@ -72,7 +72,7 @@ impl CccScenario {
             drive: c.params.drive,
             h: file.run.h,
             t_end: file.run.t_end,
-            converter: *c,
+            converter: c.clone(),
         })
     }
 

@@ -77,8 +77,8 @@ pub struct RunFile {
 pub enum Body {
     /// A general mechanism (links, joints, drivers).
     Mechanism(Mechanism),
-    /// The Constantinesco converter.
-    Converter(Converter),
+    /// The Constantinesco converter (boxed: its parameters are most of the file).
+    Converter(Box<Converter>),
 }
 
 /// `[run]`: the integration and output settings common to both kinds of file.
@@ -601,12 +601,9 @@ pub fn parse_run_file(text: &str, origin: &str) -> Result<RunFile, FileError> {
 /// after setting dotted keys (`converter.mass = 40`, `run.motor = 10`) in the tree of
 /// [`parse_value`]. Errors name the key path (no line numbers: a tree has none).
 pub fn run_file_from_value(value: toml::Value, origin: &str) -> Result<RunFile, FileError> {
-    let raw: RawFile = value.try_into().map_err(|e: toml::de::Error| FileError {
-        origin: origin.to_string(),
-        position: None,
-        field: String::new(),
-        message: one_line(&e.to_string()),
-    })?;
+    let raw: RawFile = value
+        .try_into()
+        .map_err(|e: toml::de::Error| toml_error(&e, "", origin))?;
     validate(raw, origin)
 }
 
@@ -651,18 +648,29 @@ fn one_line(s: &str) -> String {
         .join(" ")
 }
 
-/// A toml error with its line and column (from its byte span).
+/// A toml error with its line and column (from its byte span into `text`; none for a
+/// tree's error) and its key path.
 fn toml_error(e: &toml::de::Error, text: &str, origin: &str) -> FileError {
-    let position = e.span().map(|s| {
+    let position = e.span().filter(|_| !text.is_empty()).map(|s| {
         let before = text.get(..s.start.min(text.len())).unwrap_or("");
         let line = before.matches('\n').count() + 1;
         let col = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
         (line, col)
     });
+    // The key path: the error's Display gives it ("in `link.mass`") when it has no
+    // input text to quote (the toml crate keeps the keys private).
+    let mut bare = e.clone();
+    bare.set_input(None);
+    let shown = bare.to_string();
+    let field = shown
+        .lines()
+        .find_map(|l| l.trim().strip_prefix("in `")?.strip_suffix('`'))
+        .unwrap_or("")
+        .to_string();
     FileError {
         origin: origin.to_string(),
         position,
-        field: String::new(),
+        field,
         message: one_line(e.message()),
     }
 }
@@ -749,7 +757,7 @@ fn validate(raw: RawFile, origin: &str) -> Result<RunFile, FileError> {
                     "not in a converter file ([converter] describes the whole mechanism)",
                 ));
             }
-            Body::Converter(converter(&ck, c, &raw.run)?)
+            Body::Converter(Box::new(converter(&ck, c, &raw.run)?))
         }
         None => {
             for (key, given) in [
