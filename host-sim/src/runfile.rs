@@ -13,7 +13,7 @@
 //! they are checked: the text (or a [`toml::Value`] tree a sweep has edited, e.g.
 //! `converter.mass = 40`, `run.load = 600`) is deserialized into private raw structs
 //! that reject unknown keys (`deny_unknown_fields`: the message lists the allowed
-//! names) and wrong types; then [`validate`] checks every value and every reference
+//! names) and wrong types; then a validation pass checks every value and every reference
 //! (units, signs, names, capacities) before anything runs. No input makes it panic.
 //!
 //! Units: SI (m, kg, kg·m², s, N, N·m, rad/s, m/s); angles that a person writes are in
