@@ -20,7 +20,7 @@
 use crate::ccc::{self, CccSummary, End};
 use crate::cli::{parse_args, BatchOptions, Command, RunOptions, HINT};
 use crate::run::{RunError, Steps, Summary};
-use crate::scenarios::ScenarioId;
+use crate::scenarios::Source;
 use std::borrow::Cow;
 use std::fmt;
 use std::fs::{self, File};
@@ -187,13 +187,16 @@ fn parse_line(args: &[&str]) -> Result<RunOptions, String> {
 
 /// The CSV file name of job `job` of `total`: the index with at least 3 digits (as
 /// many as the last index needs, so that the names sort in job order) and the
-/// scenario, e.g. `003-ccc-s2.csv`.
-pub fn file_name(job: usize, total: usize, scenario: ScenarioId) -> String {
+/// scenario (a run file: its stem), e.g. `003-ccc-s2.csv`.
+pub fn file_name(job: usize, total: usize, scenario: &Source) -> String {
     let width = total.saturating_sub(1).to_string().len().max(3);
-    format!("{job:0width$}-{}.csv", scenario.name())
+    format!("{job:0width$}-{}.csv", scenario.label())
 }
 
 /// What one run of a batch did.
+// One per job, gathered once: the size difference of the summaries (a converter's
+// carries its motor law and settings) costs nothing worth a box.
+#[allow(clippy::large_enum_variant)]
 #[derive(Debug)]
 pub enum Outcome {
     /// A mechanism scenario: its summary, or why it failed.
@@ -318,7 +321,7 @@ pub fn write_table(w: &mut dyn Write, runs: &[BatchRun], outcomes: &[Outcome]) -
             run.line,
             run.opts.scenario.name(),
             cell(&run.args.join(" ")),
-            cell(&file_name(job, total, run.opts.scenario)),
+            cell(&file_name(job, total, &run.opts.scenario)),
             outcome.exit_code(),
             outcome.end()
         )?;
@@ -384,7 +387,7 @@ pub fn execute(opts: &BatchOptions, stdout: &mut dyn Write, stderr: &mut dyn Wri
         |job, run: &BatchRun| {
             run_one(
                 &run.opts,
-                &dir.join(file_name(job, total, run.opts.scenario)),
+                &dir.join(file_name(job, total, &run.opts.scenario)),
             )
         },
         |p, outcome| {
@@ -550,13 +553,25 @@ run five-bar
 
     #[test]
     fn file_names_sort_in_job_order() {
-        assert_eq!(file_name(3, 10, ScenarioId::CccS2), "003-ccc-s2.csv");
-        assert_eq!(file_name(7, 1000, ScenarioId::FiveBar), "007-five-bar.csv");
-        assert_eq!(file_name(7, 1001, ScenarioId::FiveBar), "0007-five-bar.csv");
+        use crate::ScenarioId;
+        let s = |id: ScenarioId| Source::from(id);
+        assert_eq!(file_name(3, 10, &s(ScenarioId::CccS2)), "003-ccc-s2.csv");
         assert_eq!(
-            file_name(0, 0, ScenarioId::SliderCrank),
+            file_name(7, 1000, &s(ScenarioId::FiveBar)),
+            "007-five-bar.csv"
+        );
+        assert_eq!(
+            file_name(7, 1001, &s(ScenarioId::FiveBar)),
+            "0007-five-bar.csv"
+        );
+        assert_eq!(
+            file_name(0, 0, &s(ScenarioId::SliderCrank)),
             "000-slider-crank.csv"
         );
+        // A run file's runs are named by its stem.
+        let file = ScenarioId::FiveBar.run_file().unwrap();
+        let f = Source::from_file("dir/my-linkage.toml", file);
+        assert_eq!(file_name(2, 3, &f), "002-my-linkage.csv");
     }
 
     #[test]

@@ -10,26 +10,26 @@
 use crate::cli::{Output, RunOptions};
 use crate::pictures::Recorder;
 use crate::run::{precision, RunError, Steps};
-use crate::scenarios::ScenarioId;
+use crate::runfile::{Body, Converter, MotorSpec, RunFile};
 use std::fmt;
 use std::fs::File;
 use std::io::{self, BufWriter, Write};
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 use structomat::ccc::{
-    initial_pose, mode_model, Audit, CccParams, Coordinates, DriveDirection, EventKind, Inputs,
-    Mode, MotorInput, Twin, TwinError, TwinSettings, JOINT_NAMES,
+    initial_pose, mode_model, Audit, Coordinates, DriveDirection, EventKind, Inputs, Mode,
+    MotorInput, Twin, TwinError, TwinSettings, JOINT_NAMES,
 };
-use structomat::motor::Motor;
 use structomat::Real;
 
-/// A converter scenario's settings (SPEC 3), after the command-line overrides.
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// A converter scenario's settings (SPEC 3), after the command-line overrides: its run
+/// file's `[converter]` and `[run]` ([`crate::runfile::Converter`]).
+#[derive(Clone, Debug, PartialEq)]
 pub struct CccScenario {
     /// `false`: free mode, no clutch (S1).
     pub clutch: bool,
-    /// Constant motor torque on the crank, N·m, CCW positive.
-    pub motor: f64,
+    /// The motor on the crank (a constant torque, N·m, CCW positive, or a motor law).
+    pub motor: MotorSpec,
     /// Load torque T_r on the shaft, N·m (≥ 0; no effect in free mode).
     pub load: f64,
     /// Which way the shaft turns.
@@ -38,54 +38,49 @@ pub struct CccScenario {
     pub h: f64,
     /// Default simulated time, s.
     pub t_end: f64,
+    /// The file's converter: every parameter and the initial state.
+    pub converter: Box<Converter>,
 }
 
 impl CccScenario {
     /// The structomatic formula of the mode the twin starts from (I0, or free, in its
     /// first coordinate choice), in physical link numbers; `?` if it cannot build.
     pub fn start_formula(&self) -> String {
-        let params = CccParams::<f64>::reference();
+        let params = self.converter.params::<f64>();
         let mode = if self.clutch { Mode::I0 } else { Mode::Free };
         let coords = mode.coordinate_choices()[0];
-        let settings = TwinSettings::reference(self.h);
-        initial_pose(&params, settings.crank, settings.swing)
-            .and_then(|pose| mode_model(&params, mode, coords, &pose).ok())
-            .map_or_else(
-                || "?".to_string(),
-                |(model, _)| format!("{} ({mode}, {coords})", model.formula()),
-            )
+        initial_pose(
+            &params,
+            self.converter.crank_deg.to_radians(),
+            self.converter.swing_deg.to_radians(),
+        )
+        .and_then(|pose| mode_model(&params, mode, coords, &pose).ok())
+        .map_or_else(
+            || "?".to_string(),
+            |(model, _)| format!("{} ({mode}, {coords})", model.formula()),
+        )
     }
 
-    /// S1 (thesis 7.1): free mode, 12 N·m, from rest; `h` = 1e-4 s, `t_end` = 1 s (it
-    /// ends at a singularity of the mechanism well before).
-    pub fn s1() -> Self {
-        CccScenario {
-            clutch: false,
-            motor: 12.0,
-            load: 0.0,
-            drive: DriveDirection::Cw,
-            h: 1e-4,
-            t_end: 1.0,
-        }
-    }
-
-    /// S2 (thesis 7.2): 12 N·m, T_r = 800 N·m from t = 0, shaft CW, from rest;
-    /// `h` = 1e-4 s, `t_end` = 1 s.
-    pub fn s2() -> Self {
-        CccScenario {
-            clutch: true,
-            motor: 12.0,
-            load: 800.0,
-            drive: DriveDirection::Cw,
-            h: 1e-4,
-            t_end: 1.0,
-        }
+    /// The settings of a converter run file; `None` for a mechanism file.
+    pub fn from_file(file: &RunFile) -> Option<Self> {
+        let Body::Converter(c) = &file.body else {
+            return None;
+        };
+        Some(CccScenario {
+            clutch: c.clutch,
+            motor: c.motor,
+            load: c.load,
+            drive: c.params.drive,
+            h: file.run.h,
+            t_end: file.run.t_end,
+            converter: c.clone(),
+        })
     }
 
     /// With the overrides of `opts` (`--motor`, `--load`, `--ccw`).
     pub fn with_options(mut self, opts: &RunOptions) -> Self {
         if let Some(m) = opts.motor {
-            self.motor = m;
+            self.motor = MotorSpec::Constant(m);
         }
         if let Some(l) = opts.load {
             self.load = l;
@@ -106,15 +101,11 @@ impl fmt::Display for CccScenario {
             };
             write!(
                 f,
-                "motor {} N·m, T_r = {} N·m, shaft {dir}, from rest",
+                "motor {}, T_r = {} N·m, shaft {dir}, from rest",
                 self.motor, self.load
             )
         } else {
-            write!(
-                f,
-                "free mode (no clutch), motor {} N·m, from rest",
-                self.motor
-            )
+            write!(f, "free mode (no clutch), motor {}, from rest", self.motor)
         }
     }
 }
@@ -229,8 +220,8 @@ pub enum End {
 /// What a converter run did (printed as a few lines by its `Display`).
 #[derive(Clone, Debug, PartialEq)]
 pub struct CccSummary {
-    /// The scenario.
-    pub scenario: ScenarioId,
+    /// The scenario's name (a built-in's, or the run file's path).
+    pub scenario: String,
     /// Its settings after the overrides.
     pub settings: CccScenario,
     /// `f64` or `f32`.
@@ -316,9 +307,7 @@ impl fmt::Display for CccSummary {
         writeln!(
             f,
             "scenario  {}: Constantinesco converter, {} ({})",
-            self.scenario.name(),
-            self.settings,
-            self.precision
+            self.scenario, self.settings, self.precision
         )?;
         writeln!(
             f,
@@ -378,7 +367,7 @@ impl fmt::Display for CccSummary {
             } => writeln!(
                 f,
                 "ended     at the mechanism's singularity (the expected end of {}): {error}",
-                self.scenario.name()
+                self.scenario
             )?,
             End::Stopped {
                 error,
@@ -429,12 +418,22 @@ pub fn simulate_with<T: Real>(
     let (Steps { t_end, n, .. }, h) = Steps::of::<T>(opts)?;
     let every = opts.every.max(1);
 
-    let mut params = CccParams::<T>::reference();
+    let conv = &settings.converter;
+    let mut params = conv.params::<T>();
     params.drive = settings.drive;
     let mut ts = TwinSettings::reference(h);
     ts.clutch = settings.clutch;
+    // Converted as `TwinSettings::reference` does: degrees to radians in f64, then T.
+    ts.crank = T::c(conv.crank_deg.to_radians());
+    ts.swing = T::c(conv.swing_deg.to_radians());
+    ts.crank_speed = T::c(conv.crank_speed);
+    ts.swing_speed = T::c(conv.swing_speed);
+    let motor = settings
+        .motor
+        .motor::<T>()
+        .map_err(|e| RunError::Setup(format!("cannot set up {name}: motor: {e}")))?;
     let inputs = Inputs {
-        motor: MotorInput::Law(Motor::Constant(T::c(settings.motor))),
+        motor: MotorInput::Law(motor),
         load: T::c(settings.load),
         measured: None,
     };
@@ -521,7 +520,8 @@ pub fn simulate_with<T: Real>(
         let r = twin.step(&inputs);
         step_wall += t0.elapsed();
         if let Err(error) = r {
-            let expected = opts.scenario == ScenarioId::CccS1 && error.at_singularity();
+            // Free mode (S1) ends at the diode rods' singularity: its expected end.
+            let expected = !settings.clutch && error.at_singularity();
             end = End::Stopped { error, expected };
             break;
         }
@@ -559,7 +559,7 @@ pub fn simulate_with<T: Real>(
     let wall = start.elapsed();
     let a = twin.audit();
     Ok(CccSummary {
-        scenario: opts.scenario,
+        scenario: opts.scenario.name().to_string(),
         settings,
         precision,
         h: h.to_f64(),

@@ -1,17 +1,22 @@
 //! Command-line parsing (hand-written, std only) and the usage text.
 
-use crate::scenarios::ScenarioId;
+use crate::scenarios::{ScenarioId, Source};
 use std::ffi::OsString;
 use std::fmt;
 use std::path::PathBuf;
 
 /// The usage text of `host-sim help`.
 pub const USAGE: &str = "\
-host-sim: simulate the built-in mechanisms of the structomat core
+host-sim: simulate the built-in mechanisms of the structomat core, or mechanisms and
+the Constantinesco converter described in run files (TOML)
 
 Usage:
   host-sim list                      list the built-in scenarios and their formulas
   host-sim run <scenario> [options]  simulate a scenario and write CSV
+  host-sim run FILE.toml [options]   simulate a run file (options override its values)
+  host-sim analyze FILE.toml|<scenario>
+                                     find and print the structomatic formula, the DOF
+                                     and each group with its links and joints
   host-sim batch FILE --out-dir DIR [--threads N] [--quiet]
                                      run the runs listed in FILE, N at a time
   host-sim plot RUN.csv --out-dir DIR
@@ -20,6 +25,8 @@ Usage:
 
 Scenarios: slider-crank, five-bar (mechanisms);
            ccc-s1, ccc-s2 (the Constantinesco torque converter, SPEC 3)
+  Each ships as a run file, host-sim/scenarios/<name>.toml (embedded): copy one to
+  start your own.
 
 Options of run:
   --out FILE|-       write the CSV to FILE, the summary to stdout;
@@ -27,8 +34,9 @@ Options of run:
   --h SECONDS        step size (default: the scenario's own)
   --t-end SECONDS    simulated time (default: the scenario's own);
                      runs ceil(t_end / h) fixed steps
-  --every N          write every N-th step (default 1); the row at t = 0 is always written
-  --f32              run the core in single precision (f32)
+  --every N          write every N-th step (default: the file's, else 1); the row at
+                     t = 0 is always written
+  --f32              run the core in single precision (f32; default: the file's)
   --quiet            no summary
   --plot DIR         draw the run's plots into DIR (created if missing), each as .svg
                      and .png: converter: crank, motor_torque, reactions, speeds,
@@ -109,7 +117,41 @@ Batch (host-sim batch FILE --out-dir DIR):
   message                       the error of a run that did not complete
   Exit status: 0 when every run succeeded (exit status 0 alone), 1 otherwise.
 
-Exit status: 0 success, 1 run failure (step error, file error), 2 bad arguments.
+Run files (TOML; the full reference with every key: host-sim/scenarios/README.md).
+  SI units (m, kg, kg·m², s, N, N·m, rad/s); angles in degrees in keys ending in _deg,
+  motor speeds in rpm in keys ending in _rpm. Unknown keys are errors; every value is
+  checked before the first step; an error names the file, the line:column when the
+  toml parser knows it, and the field, e.g.  my.toml: link \"coupler\".mass: must be >= 0
+  A mechanism:
+    name, description, gravity = [gx, gy] (m/s², default [0, -9.81])
+    [[ground]]  name, at = [x, y]
+    [[link]]    name, mass, inertia (about the COG), length (a bar: points start, end)
+                or none (a block: point origin), points = { D = [x, y], ... } (link
+                frame), cog = distance along the bar or [x, y] (default: the midpoint),
+                angle_deg (the initial guess of the link's angle: picks the branch)
+    [[joint]]   name, type = \"revolute\", points = [\"A\", \"crank.start\"]
+                or type = \"prismatic\", slider = \"slider.origin\", guide = \"A\",
+                guide_angle_deg, slider_angle_deg, offset (the guess along the guide, m)
+                A point is a ground point's name or link.point (start, end, origin, a
+                named point, or an index).
+    [[driver]]  link, joint (the motor element: link about/along joint; coordinates
+                q1, q2, ... in driver order), q0_deg (revolute) or q0 (prismatic, m),
+                qd0, offset_deg, motor
+    [[load]]    link, at = [x, y] (link frame), force = [fx, fy] (N), moment (N·m)
+    The motion-transmission sequence is found by `host-sim analyze`'s search.
+  The converter: [converter] a, f, h (pivots A, F and shaft H), [[converter.link]] x 8
+    (length, mass, inertia), rocker_d, mass, mass_inertia, mass_at, shaft_inertia,
+    drive = \"cw\"|\"ccw\", gravity, branch_c, branch_g, branch_i = \"left\"|\"right\",
+    crank_deg, swing_deg, crank_speed, swing_speed
+  [run] h, t_end (s), every, f32, integrator = \"dp5\" (the fixed-step Dormand-Prince;
+    the only one the core's Simulation steps with); converter only: mode =
+    \"clutch\"|\"free\", motor, load (T_r, N·m)
+  motor = a torque in N·m, or { type = \"constant\", torque }, { type = \"asynchronous\",
+    breakdown_rpm, breakdown_torque, rated_rpm, rated_torque, synchronous_rpm },
+    { type = \"polynomial\", a, b, c } (T = a + b ω + c ω², ω in rad/s)
+
+Exit status: 0 success, 1 run failure (step error, file error), 2 bad arguments or a
+bad run file.
 ";
 
 /// The hint appended to argument errors.
@@ -124,20 +166,25 @@ pub enum Output {
     File(PathBuf),
 }
 
+/// Frames a second of an animation unless `--fps` says otherwise.
+pub const DEFAULT_FPS: u32 = 25;
+/// Slow-motion factor of an animation unless `--slow` says otherwise (real time).
+pub const DEFAULT_SLOW: f64 = 1.0;
+
 /// Options of `host-sim run`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RunOptions {
-    /// The scenario.
-    pub scenario: ScenarioId,
+    /// The scenario: a built-in or a run file's contents.
+    pub scenario: Source,
     /// Where the CSV goes.
     pub out: Output,
     /// Step size, s (`None`: the scenario's).
     pub h: Option<f64>,
     /// Simulated time, s (`None`: the scenario's).
     pub t_end: Option<f64>,
-    /// Write every N-th step (at least 1).
+    /// Write every N-th step (at least 1): `--every`, else the run file's.
     pub every: u64,
-    /// Run the core in `f32`.
+    /// Run the core in `f32`: `--f32`, else the run file's.
     pub f32: bool,
     /// No summary.
     pub quiet: bool,
@@ -160,10 +207,11 @@ pub struct RunOptions {
 
 impl RunOptions {
     /// The default options for `scenario`: CSV to stdout, the scenario's own `h` and
-    /// `t_end`, every step, `f64`, with a summary.
-    pub fn new(scenario: ScenarioId) -> Self {
+    /// `t_end`, every step, `f64`, with a summary (see [`RunOptions::from_source`] for
+    /// the run file's `every` and `f32`).
+    pub fn new(scenario: impl Into<Source>) -> Self {
         RunOptions {
-            scenario,
+            scenario: scenario.into(),
             out: Output::Stdout,
             h: None,
             t_end: None,
@@ -175,9 +223,24 @@ impl RunOptions {
             motor: None,
             plot: None,
             animate: Vec::new(),
-            fps: 25,
-            slow: 1.0,
+            fps: DEFAULT_FPS,
+            slow: DEFAULT_SLOW,
         }
+    }
+}
+
+impl RunOptions {
+    /// The options `host-sim run` gives a scenario without options: its run file's
+    /// `every` and `f32` (what a parameter sweep starts from). A built-in whose
+    /// embedded file does not parse keeps the defaults of [`RunOptions::new`] (its run
+    /// reports the file's error).
+    pub fn from_source(scenario: impl Into<Source>) -> Self {
+        let mut o = RunOptions::new(scenario);
+        if let Ok(f) = o.scenario.run_file() {
+            o.every = f.run.every;
+            o.f32 = f.run.f32;
+        }
+        o
     }
 }
 
@@ -216,6 +279,8 @@ pub enum Command {
     List,
     /// `host-sim run <scenario> [options]`.
     Run(RunOptions),
+    /// `host-sim analyze FILE.toml|<scenario>`.
+    Analyze(Source),
     /// `host-sim batch FILE --out-dir DIR [--threads N] [--quiet]`.
     Batch(BatchOptions),
     /// `host-sim plot RUN.csv --out-dir DIR`.
@@ -267,13 +332,38 @@ where
         },
         "run" => parse_run(rest),
         "batch" => parse_batch(rest),
+        "analyze" => parse_analyze(rest),
         "plot" => parse_plot(rest),
         other if other.starts_with('-') => Err(usage_err(format!(
-            "unknown option '{other}' before the command (commands: list, run, batch, plot, help)"
+            "unknown option '{other}' before the command (commands: list, run, analyze, batch, plot, help)"
         ))),
         other => Err(usage_err(format!(
-            "unknown command '{other}' (commands: list, run, batch, plot, help)"
+            "unknown command '{other}' (commands: list, run, analyze, batch, plot, help)"
         ))),
+    }
+}
+
+/// A scenario argument of `command`: a built-in name or a run file (read and validated
+/// here, so that nothing runs half-configured and a batch checks its files up front).
+fn parse_source(command: &str, arg: &str) -> Result<Source, UsageError> {
+    if ScenarioId::from_name(arg).is_none() && !arg.ends_with(".toml") {
+        return Err(usage_err(format!(
+            "{command}: unknown scenario '{arg}' (known: {}; or a run file FILE.toml)",
+            ScenarioId::names()
+        )));
+    }
+    Source::from_arg(arg).map_err(|e| usage_err(format!("{command}: {e}")))
+}
+
+fn parse_analyze(args: &[String]) -> Result<Command, UsageError> {
+    match args {
+        [] => Err(usage_err(format!(
+            "analyze: missing run file or scenario (known: {})",
+            ScenarioId::names()
+        ))),
+        [a, ..] if is_help(a) => Ok(Command::Help),
+        [a] => parse_source("analyze", a).map(Command::Analyze),
+        [_, b, ..] => Err(usage_err(format!("analyze: unexpected argument '{b}'"))),
     }
 }
 
@@ -320,7 +410,7 @@ fn option_value(
 fn parse_run(args: &[String]) -> Result<Command, UsageError> {
     let mut scenario = None;
     let mut out = Output::Stdout;
-    let (mut h, mut t_end, mut every) = (None, None, 1);
+    let (mut h, mut t_end, mut every) = (None, None, None);
     let (mut f32, mut quiet, mut ccw) = (false, false, false);
     let (mut load, mut motor) = (None, None);
     let (mut plot, mut animate, mut fps, mut slow) = (None, Vec::new(), None, None);
@@ -332,18 +422,13 @@ fn parse_run(args: &[String]) -> Result<Command, UsageError> {
             return Ok(Command::Help);
         }
         if arg == "-" || !arg.starts_with('-') {
-            if let Some(first) = scenario {
+            if let Some(first) = &scenario {
                 return Err(usage_err(format!(
                     "run: unexpected argument '{arg}' (the scenario is already '{}')",
-                    ScenarioId::name(first)
+                    Source::name(first)
                 )));
             }
-            scenario = Some(ScenarioId::from_name(arg).ok_or_else(|| {
-                usage_err(format!(
-                    "run: unknown scenario '{arg}' (known: {})",
-                    ScenarioId::names()
-                ))
-            })?);
+            scenario = Some(parse_source("run", arg)?);
             continue;
         }
         let (name, inline) = split_option(arg);
@@ -364,7 +449,7 @@ fn parse_run(args: &[String]) -> Result<Command, UsageError> {
                     "--t-end" => t_end = Some(parse_seconds(name, &value)?),
                     "--load" => load = Some(parse_load(&value)?),
                     "--motor" => motor = Some(parse_torque(name, &value)?),
-                    _ => every = parse_every(&value)?,
+                    _ => every = Some(parse_every(&value)?),
                 }
             }
             "--plot" | "--animate" | "--fps" | "--slow" => {
@@ -385,7 +470,7 @@ fn parse_run(args: &[String]) -> Result<Command, UsageError> {
             ScenarioId::names()
         ))
     })?;
-    check_converter_options(scenario, ccw, load.is_some(), motor.is_some())?;
+    check_converter_options(&scenario, ccw, load.is_some(), motor.is_some())?;
     if animate.is_empty() {
         if let Some(name) = [("--fps", fps.is_some()), ("--slow", slow.is_some())]
             .iter()
@@ -394,7 +479,10 @@ fn parse_run(args: &[String]) -> Result<Command, UsageError> {
             return Err(usage_err(format!("{name}: only with --animate FILE")));
         }
     }
-    let defaults = RunOptions::new(scenario);
+    // The run file's own output settings, unless the command line gives them.
+    let file = scenario.run_file().ok();
+    let every = every.unwrap_or_else(|| file.as_ref().map_or(1, |f| f.run.every));
+    let f32 = f32 || file.is_some_and(|f| f.run.f32);
     Ok(Command::Run(RunOptions {
         scenario,
         out,
@@ -408,8 +496,8 @@ fn parse_run(args: &[String]) -> Result<Command, UsageError> {
         motor,
         plot,
         animate,
-        fps: fps.unwrap_or(defaults.fps),
-        slow: slow.unwrap_or(defaults.slow),
+        fps: fps.unwrap_or(DEFAULT_FPS),
+        slow: slow.unwrap_or(DEFAULT_SLOW),
     }))
 }
 
@@ -564,7 +652,7 @@ fn parse_threads(value: &str) -> Result<usize, UsageError> {
 /// and `--load` not to `ccc-s1` (free mode: no clutch, no shaft load, no drive
 /// direction).
 fn check_converter_options(
-    scenario: ScenarioId,
+    scenario: &Source,
     ccw: bool,
     load: bool,
     motor: bool,
@@ -579,11 +667,12 @@ fn check_converter_options(
             )));
         }
     }
-    if scenario == ScenarioId::CccS1 {
+    if scenario.is_free_converter() {
         if let Some((name, _)) = given[..2].iter().find(|(_, g)| *g) {
             return Err(usage_err(format!(
-                "{name}: ccc-s1 runs in free mode without clutches, so it has no shaft load \
-                 and no drive direction (use ccc-s2)"
+                "{name}: {} runs in free mode without clutches, so it has no shaft load \
+                 and no drive direction (use ccc-s2, or mode = \"clutch\" in a run file)",
+                scenario.name()
             )));
         }
     }

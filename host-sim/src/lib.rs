@@ -26,11 +26,23 @@
 //! golden SHA-256 hashes of every built-in scenario's CSV are pinned in
 //! `host-sim/tests/golden.rs`).
 //!
+//! Mechanisms and converter runs can also be described in run files (TOML,
+//! [`runfile`]): `host-sim run FILE.toml [options]`, the options overriding the file's
+//! values; the built-in scenarios ship as such files (`host-sim/scenarios/*.toml`,
+//! embedded). `host-sim analyze FILE.toml|<scenario>` prints the motion-transmission
+//! sequence that [`analysis`] finds from a mechanism's joints and drivers.
+//!
+//! A parameter sweep runs files the way `host-sim run` does: [`runfile::parse_value`],
+//! [`runfile::set_dotted`] (e.g. `converter.mass = 40`), [`run_file_from_value`], then
+//! [`Source::from_file`] into [`RunOptions::from_source`] and [`batch::run_one`] (or
+//! [`execute`]).
+//!
 //! The binary is a thin wrapper over [`main_with`]; tests and benches can call
 //! [`parse_args`], [`simulate`] or [`main_with`] directly.
 
 #![warn(missing_docs)]
 
+pub mod analysis;
 pub mod animate;
 pub mod batch;
 pub mod ccc;
@@ -40,6 +52,7 @@ pub mod draw;
 pub mod pictures;
 pub mod plot;
 pub mod run;
+pub mod runfile;
 pub mod scenarios;
 pub mod sweep;
 
@@ -50,7 +63,8 @@ pub use cli::{
 };
 pub use columns::{Column, Layout};
 pub use run::{simulate, step_count, MaxReaction, MeanSpeed, RunError, Steps, Summary, MAX_STEPS};
-pub use scenarios::ScenarioId;
+pub use runfile::{parse_run_file, run_file_from_value, FileError, RunFile};
+pub use scenarios::{ScenarioId, Source};
 
 use std::ffi::OsString;
 use std::fs::File;
@@ -84,6 +98,19 @@ where
             Err(e) => report_write(stderr, "stdout", &e),
         },
         Ok(Command::Run(opts)) => execute(&opts, stdout, stderr),
+        Ok(Command::Analyze(source)) => match analyze(&source) {
+            Ok(text) => match stdout
+                .write_all(text.as_bytes())
+                .and_then(|_| stdout.flush())
+            {
+                Ok(()) => EXIT_OK,
+                Err(e) => report_write(stderr, "stdout", &e),
+            },
+            Err(e) => {
+                let _ = writeln!(stderr, "host-sim: analyze {}: {e}", source.name());
+                EXIT_FAILURE
+            }
+        },
         Ok(Command::Batch(opts)) => batch::execute(&opts, stdout, stderr),
         Ok(Command::Plot(opts)) => pictures::plot_csv(&opts, stdout, stderr),
         Err(e) => {
@@ -91,6 +118,40 @@ where
             EXIT_USAGE
         }
     }
+}
+
+/// The text of `host-sim analyze`: for a mechanism, its formula, DOF and groups (the
+/// structomatic analysis of [`analysis`]); for the converter, the formula of the mode
+/// it starts in. Errors: why no sequence of the library's groups solves it, or why the
+/// core refuses the model.
+pub fn analyze(source: &Source) -> Result<String, String> {
+    let file = source.run_file().map_err(|e| e.to_string())?;
+    let mut text = format!("mechanism {}", source.name());
+    if let Some(n) = &file.name {
+        if n != source.name() {
+            text.push_str(&format!(" ({n})"));
+        }
+    }
+    text.push('\n');
+    match &file.body {
+        runfile::Body::Mechanism(m) => {
+            let a = analysis::analyze(m).map_err(|e| e.to_string())?;
+            let model = analysis::build_model::<f64>(m, &a).map_err(|e| {
+                format!("the sequence was found but the core refuses the model: {e}")
+            })?;
+            text.push_str(&analysis::report(m, &a, &model));
+        }
+        runfile::Body::Converter(_) => {
+            let c = source
+                .converter()
+                .ok_or_else(|| "not a converter".to_string())?;
+            text.push_str(&format!(
+                "formula   {} (the converter's twin: the mode and coordinates change as it runs; host-sim help)\n",
+                c.start_formula()
+            ));
+        }
+    }
+    Ok(text)
 }
 
 /// Writes `host-sim list`: one line per scenario with its formula, description and

@@ -3,7 +3,6 @@
 use crate::cli::{RunOptions, UsageError};
 use crate::columns::Layout;
 use crate::pictures::Recorder;
-use crate::scenarios::ScenarioId;
 use std::fmt;
 use std::io::{self, Write};
 use std::time::{Duration, Instant};
@@ -117,8 +116,8 @@ pub struct MaxReaction {
 /// What a run did (printed as a few lines by its `Display`).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Summary {
-    /// The scenario.
-    pub scenario: ScenarioId,
+    /// The scenario's name (a built-in's, or the run file's path).
+    pub scenario: String,
     /// Its structomatic formula.
     pub formula: String,
     /// `f64` or `f32`.
@@ -188,9 +187,7 @@ impl fmt::Display for Summary {
         writeln!(
             f,
             "scenario  {}: {} ({})",
-            self.scenario.name(),
-            self.formula,
-            self.precision
+            self.scenario, self.formula, self.precision
         )?;
         writeln!(
             f,
@@ -280,7 +277,7 @@ impl Steps {
             (Some(h), Some(t)) => (h, t),
             (h, t) => {
                 let (dh, dt) = opts.scenario.default_steps().map_err(|e| {
-                    RunError::Setup(format!("cannot build {}: {e}", opts.scenario.name()))
+                    RunError::Setup(format!("cannot read {}: {e}", opts.scenario.name()))
                 })?;
                 (h.unwrap_or(dh), t.unwrap_or(dt))
             }
@@ -326,8 +323,9 @@ pub fn step_count(h: f64, t_end: f64) -> Result<u64, UsageError> {
 
 /// Runs the mechanism scenario of `opts` in scalar `T`, writing the CSV to `csv`
 /// (`target` names it in errors). The CSV is flushed before returning, also on a step
-/// error. A converter scenario is a [`RunError::Setup`]: [`crate::ccc::simulate`] runs
-/// those.
+/// error. The scenario (a built-in's embedded run file or a file's contents) is built by
+/// the structomatic analysis of [`crate::analysis`]. A converter scenario is a
+/// [`RunError::Setup`]: [`crate::ccc::simulate`] runs those.
 pub fn simulate<T: Real>(
     opts: &RunOptions,
     csv: &mut dyn Write,
@@ -345,17 +343,7 @@ pub fn simulate_with<T: Real>(
     mut rec: Option<&mut Recorder>,
 ) -> Result<Summary, RunError> {
     let precision = precision::<T>();
-    let not_a_mechanism = || {
-        RunError::Setup(format!(
-            "{} is a converter scenario: run it with host_sim::ccc::simulate",
-            opts.scenario.name()
-        ))
-    };
-    let scenario = opts
-        .scenario
-        .build::<T>()
-        .ok_or_else(not_a_mechanism)?
-        .map_err(|e| RunError::Setup(format!("cannot build {}: {e}", opts.scenario.name())))?;
+    let scenario = opts.scenario.build::<T>().map_err(RunError::Setup)?;
     let (Steps { n, .. }, h) = Steps::of::<T>(opts)?;
     let every = opts.every.max(1);
     let mut sim = scenario
@@ -457,7 +445,7 @@ pub fn simulate_with<T: Real>(
         angular,
     });
     Ok(Summary {
-        scenario: opts.scenario,
+        scenario: opts.scenario.name().to_string(),
         formula: model.formula().to_string(),
         precision,
         h: h.to_f64(),

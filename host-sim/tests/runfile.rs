@@ -1,0 +1,445 @@
+//! Run files (TOML): the built-in scenarios' files against the core's built-in
+//! mechanisms and converter parameters (bit for bit), `host-sim run FILE.toml` with and
+//! without option overrides, the sweep entry points, and every kind of bad file (each
+//! message names the file and the field).
+
+mod common;
+
+use common::TempDir;
+use host_sim::runfile::{parse_value, set_dotted, Body, MotorSpec};
+use host_sim::{parse_run_file, run_file_from_value, RunOptions, ScenarioId, Source};
+use structomat::ccc::{CccParams, DriveDirection};
+use structomat::mechanisms::{five_bar, slider_crank, Scenario};
+use structomat::Real;
+
+/// Steps the core's built-in scenario and the file's side by side; every state bit
+/// for bit the same.
+fn same_trajectory<T: Real>(core: Scenario<T>, id: ScenarioId, steps: usize) {
+    let file = id.build::<T>().expect("a mechanism").expect("builds");
+    assert_eq!(
+        file.model.formula().to_string(),
+        core.model.formula().to_string()
+    );
+    assert_eq!(file.q0, core.q0);
+    assert_eq!(file.qd0, core.qd0);
+    assert_eq!(file.h, core.h);
+    assert_eq!(file.t_end, core.t_end);
+    let mut a = core.simulation().expect("core setup");
+    let mut b = file.simulation().expect("file setup");
+    for k in 0..steps {
+        a.step().expect("core step");
+        b.step().expect("file step");
+        let bits = |v: &[T]| v.iter().map(|x| x.to_f64().to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(a.q()), bits(b.q()), "{}: q after step {k}", id.name());
+        assert_eq!(
+            bits(a.qd()),
+            bits(b.qd()),
+            "{}: qd after step {k}",
+            id.name()
+        );
+    }
+}
+
+#[test]
+fn built_in_files_are_the_cores_mechanisms_bit_for_bit() {
+    same_trajectory(slider_crank::<f64>().unwrap(), ScenarioId::SliderCrank, 200);
+    same_trajectory(five_bar::<f64>().unwrap(), ScenarioId::FiveBar, 200);
+    same_trajectory(slider_crank::<f32>().unwrap(), ScenarioId::SliderCrank, 100);
+    same_trajectory(five_bar::<f32>().unwrap(), ScenarioId::FiveBar, 100);
+}
+
+#[test]
+fn built_in_converter_files_are_the_reference_converter() {
+    for (id, clutch, load) in [
+        (ScenarioId::CccS1, false, 0.0),
+        (ScenarioId::CccS2, true, 800.0),
+    ] {
+        let f = id.run_file().unwrap_or_else(|e| panic!("{e}"));
+        let Body::Converter(c) = &f.body else {
+            panic!("{}: a converter", id.name())
+        };
+        assert_eq!(c.params, CccParams::<f64>::reference(), "{}", id.name());
+        assert_eq!(
+            c.params::<f32>(),
+            CccParams::<f32>::reference(),
+            "{}",
+            id.name()
+        );
+        assert_eq!(
+            (c.clutch, c.load, c.motor),
+            (clutch, load, MotorSpec::Constant(12.0))
+        );
+        assert_eq!((c.crank_deg, c.swing_deg), (105.0, 90.0));
+        assert_eq!(
+            (f.run.h, f.run.t_end, f.run.every, f.run.f32),
+            (1e-4, 1.0, 1, false)
+        );
+    }
+}
+
+/// `host-sim run FILE.toml` of a copy of a built-in file writes the built-in's bytes;
+/// the command line overrides the file's values.
+#[test]
+fn run_a_file_and_override_its_values() {
+    let dir = TempDir::new("runfile");
+    let path = dir.join("my-five-bar.toml");
+    // The file asks for a coarser step and every 2nd row; the options restore the
+    // built-in's.
+    let text = ScenarioId::FiveBar
+        .file_text()
+        .replace("h = 0.001", "h = 0.002")
+        .replace("every = 1", "every = 2");
+    std::fs::write(&path, &text).unwrap();
+    let (code, builtin, err) = common::run(&["run", "five-bar", "--t-end", "0.02", "--quiet"]);
+    assert_eq!(code, 0, "{err}");
+    let (code, from_file, err) = common::run(&[
+        "run", &path, "--t-end", "0.02", "--h", "0.001", "--every", "1", "--quiet",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(from_file, builtin);
+    // Without the overrides the file's values hold: h = 0.002, every 2nd row: 0, 0.004, ...
+    let (code, coarse, _) = common::run(&["run", &path, "--t-end", "0.02", "--quiet"]);
+    assert_eq!(code, 0);
+    let times: Vec<&str> = coarse
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').next().unwrap())
+        .collect();
+    assert_eq!(times, ["0", "0.004", "0.008", "0.012", "0.016", "0.02"]);
+    // The summary names the file.
+    let (code, _, summary) = common::run(&["run", &path, "--t-end", "0.004"]);
+    assert_eq!(code, 0);
+    assert!(
+        summary.contains(&format!("scenario  {path}: Z(0) + R(1) + R(2) + RRR(3,4)")),
+        "{summary}"
+    );
+
+    // The converter: a file with another load, and --load overriding it.
+    let s2 = dir.join("s2.toml");
+    std::fs::write(
+        &s2,
+        ScenarioId::CccS2
+            .file_text()
+            .replace("load = 800.0", "load = 0.0"),
+    )
+    .unwrap();
+    let (_, builtin, _) = common::run(&["run", "ccc-s2", "--t-end", "0.003", "--quiet"]);
+    let (_, file0, _) = common::run(&["run", &s2, "--t-end", "0.003", "--quiet"]);
+    let (code, file800, err) =
+        common::run(&["run", &s2, "--t-end", "0.003", "--load", "800", "--quiet"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        file800 == builtin,
+        "--load 800 over the file's 0 gives ccc-s2"
+    );
+    assert!(file0 != builtin, "the file's load 0 is used");
+    // Free mode in a file refuses --load, as ccc-s1 does.
+    let s1 = dir.join("s1.toml");
+    std::fs::write(&s1, ScenarioId::CccS1.file_text()).unwrap();
+    let (code, _, err) = common::run(&["run", &s1, "--load", "10"]);
+    assert_eq!(code, 2);
+    assert!(err.contains("--load") && err.contains("free mode"), "{err}");
+}
+
+/// What a parameter sweep does: edit dotted keys of the tree, re-validate, run through
+/// the same path as `host-sim run`.
+#[test]
+fn sweep_entry_points() {
+    let text = ScenarioId::CccS2.file_text();
+    let mut tree = parse_value(text, "ccc-s2.toml").unwrap();
+    set_dotted(&mut tree, "converter.mass", toml::Value::Integer(40)).unwrap();
+    set_dotted(&mut tree, "run.motor", toml::Value::Float(10.0)).unwrap();
+    set_dotted(&mut tree, "run.load", toml::Value::Integer(600)).unwrap();
+    set_dotted(&mut tree, "run.t_end", toml::Value::Float(0.002)).unwrap();
+    let f = run_file_from_value(tree.clone(), "sweep job 3").unwrap();
+    let Body::Converter(c) = &f.body else {
+        panic!("converter")
+    };
+    assert_eq!(
+        (c.params.mass, c.motor, c.load),
+        (40.0, MotorSpec::Constant(10.0), 600.0)
+    );
+
+    // The same run as `host-sim run ccc-s2 --motor 10 --load 600` with the mass edited
+    // in a file: one code path.
+    let dir = TempDir::new("sweep");
+    let csv = dir.path.join("job.csv");
+    let opts = RunOptions::from_source(Source::from_file("sweep-job-3", f));
+    let outcome = host_sim::batch::run_one(&opts, &csv);
+    assert_eq!(outcome.exit_code(), 0, "{:?}", outcome.message());
+    let path = dir.join("edited.toml");
+    std::fs::write(
+        &path,
+        text.replace("mass = 6.0 ", "mass = 40.0 ")
+            .replace("t_end = 1.0", "t_end = 0.002"),
+    )
+    .unwrap();
+    let (code, out, err) =
+        common::run(&["run", &path, "--motor", "10", "--load", "600", "--quiet"]);
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(std::fs::read_to_string(&csv).unwrap(), out);
+
+    // Bad edits are named by their key path.
+    let mut bad = tree.clone();
+    set_dotted(&mut bad, "run.load", toml::Value::Integer(-1)).unwrap();
+    let e = run_file_from_value(bad, "job").unwrap_err();
+    assert_eq!(e.field, "run.load", "{e}");
+    assert!(
+        e.to_string()
+            .starts_with("job: run.load: must be >= 0, got -1"),
+        "{e}"
+    );
+    let mut bad = tree.clone();
+    set_dotted(&mut bad, "converter.masss", toml::Value::Integer(1)).unwrap();
+    let e = run_file_from_value(bad, "job").unwrap_err().to_string();
+    assert!(
+        e.contains("unknown field `masss`") && e.contains("mass_inertia"),
+        "{e}"
+    );
+    let mut bad = tree;
+    set_dotted(
+        &mut bad,
+        "converter.mass",
+        toml::Value::String("heavy".into()),
+    )
+    .unwrap();
+    let e = run_file_from_value(bad, "job").unwrap_err();
+    assert_eq!(e.field, "converter.mass", "{e}");
+    assert!(e.message.contains("invalid type"), "{e}");
+    assert!(set_dotted(&mut toml::Value::Integer(1), "a.b", toml::Value::Integer(1)).is_err());
+}
+
+/// A batch line may name a run file: checked before anything runs, named by its stem.
+#[test]
+fn batch_runs_files() {
+    let dir = TempDir::new("batch-file");
+    let path = dir.join("fb.toml");
+    std::fs::write(&path, ScenarioId::FiveBar.file_text()).unwrap();
+    let batch = dir.join("b.batch");
+    std::fs::write(
+        &batch,
+        format!("{path} --t-end 0.003\nfive-bar --t-end 0.003\n"),
+    )
+    .unwrap();
+    let out = dir.join("out");
+    let (code, _, err) = common::run(&["batch", &batch, "--out-dir", &out, "--quiet"]);
+    assert_eq!(code, 0, "{err}");
+    let a = std::fs::read(dir.path.join("out/000-fb.csv")).unwrap();
+    let b = std::fs::read(dir.path.join("out/001-five-bar.csv")).unwrap();
+    assert_eq!(a, b);
+    // A bad file on a line: the batch refuses before running anything.
+    std::fs::write(&path, "name = 3\n").unwrap();
+    let (code, _, err) = common::run(&["batch", &batch, "--out-dir", &out, "--quiet"]);
+    assert_eq!(code, 2);
+    assert!(err.contains("line 1") && err.contains("fb.toml"), "{err}");
+}
+
+/// Parses `text` as `bad.toml`; the error's text.
+fn bad(text: &str) -> String {
+    match parse_run_file(text, "bad.toml") {
+        Ok(_) => panic!("accepted:\n{text}"),
+        Err(e) => e.to_string(),
+    }
+}
+
+fn five() -> &'static str {
+    ScenarioId::FiveBar.file_text()
+}
+
+#[test]
+fn bad_files_name_the_file_and_the_field() {
+    // Missing field (serde names it, the position is the table's).
+    let e = bad(&five().replace("mass = 0.740\n", ""));
+    assert!(
+        e.starts_with("bad.toml:") && e.contains("missing field `mass`"),
+        "{e}"
+    );
+    // Wrong type: with line and column.
+    let e = bad(&five().replace("mass = 0.740", "mass = \"heavy\""));
+    let line = five().lines().position(|l| l == "mass = 0.740").unwrap() + 1;
+    assert!(
+        e.starts_with(&format!("bad.toml:{line}:8: link.mass:")),
+        "{e}"
+    );
+    assert!(e.contains("invalid type") && e.contains("f64"), "{e}");
+    // Unknown field: the allowed names are listed.
+    let e = bad(&five().replace("mass = 0.740", "mass = 0.740\nmasss = 1.0"));
+    assert!(e.starts_with(&format!("bad.toml:{}:1:", line + 1)), "{e}");
+    assert!(
+        e.contains("unknown field `masss`") && e.contains("angle_deg"),
+        "{e}"
+    );
+    let e = bad(&five().replace("[run]", "[run]\nintegrator2 = 1"));
+    assert!(
+        e.contains("unknown field `integrator2`") && e.contains("t_end"),
+        "{e}"
+    );
+    // Only dp5: the core's Simulation has no adaptive stepping.
+    let e = bad(&five().replace("integrator = \"dp5\"", "integrator = \"adaptive\""));
+    assert!(
+        e.contains("unknown variant `adaptive`") && e.contains("dp5"),
+        "{e}"
+    );
+    // Negative mass.
+    let e = bad(&five().replace("mass = 0.740", "mass = -1"));
+    assert_eq!(e, "bad.toml: link \"coupler\".mass: must be >= 0, got -1");
+    // A joint to an unknown link, and to a missing point.
+    let e = bad(&five().replace(
+        "\"coupler.end\", \"rocker.end\"",
+        "\"coupler.end\", \"rokker.end\"",
+    ));
+    assert!(
+        e.starts_with("bad.toml: joint \"C\".points: unknown link \"rokker\" in \"rokker.end\" (links: crank1, crank2, coupler, rocker)"),
+        "{e}"
+    );
+    let e = bad(&five().replace(
+        "\"coupler.end\", \"rocker.end\"",
+        "\"coupler.end\", \"rocker.tip\"",
+    ));
+    assert!(
+        e.contains("joint \"C\".points: link \"rocker\" has no point \"tip\""),
+        "{e}"
+    );
+    let e = bad(&five().replace(
+        "points = [\"A\", \"crank1.start\"]",
+        "points = [\"Q\", \"crank1.start\"]",
+    ));
+    assert!(
+        e.contains("joint \"A\".points: unknown point \"Q\" (ground points: A, E"),
+        "{e}"
+    );
+    // Duplicate names: links, a link and a ground point, joints.
+    let e = bad(&five().replace("name = \"rocker\"", "name = \"coupler\""));
+    assert!(
+        e.contains("link[3].name: duplicate name \"coupler\" (already used by link[2].name)"),
+        "{e}"
+    );
+    let e = bad(&five().replace("name = \"crank2\"", "name = \"E\""));
+    assert!(
+        e.contains("link[1].name: duplicate name \"E\" (already used by ground[1].name)"),
+        "{e}"
+    );
+    let e = bad(&five().replace("name = \"D\"", "name = \"B\""));
+    assert!(
+        e.contains("joint \"B\".name: duplicate joint name \"B\""),
+        "{e}"
+    );
+    // A driver on a joint that is not there, a non-positive step, every = 0.
+    let e = bad(&five().replace("joint = \"E\"", "joint = \"X\""));
+    assert!(
+        e.contains("driver[1].joint: unknown joint \"X\" (joints: A, E, B, D, C)"),
+        "{e}"
+    );
+    let e = bad(&five().replace("h = 0.001", "h = 0"));
+    assert_eq!(e, "bad.toml: run.h: must be > 0, got 0");
+    let e = bad(&five().replace("every = 1", "every = 0"));
+    assert_eq!(e, "bad.toml: run.every: must be at least 1, got 0");
+    // Motors: unknown type, unknown key, bad speeds.
+    let e = bad(&five().replace(
+        "{ type = \"constant\", torque = 10.0 }",
+        "{ type = \"diesel\" }",
+    ));
+    assert!(
+        e.contains("driver[0].motor.type: unknown motor type \"diesel\""),
+        "{e}"
+    );
+    let e = bad(&five().replace("torque = 10.0 }", "torque = 10.0, rpm = 3 }"));
+    assert!(
+        e.contains("driver[0].motor.rpm: unknown key for a constant motor (allowed: type, torque)"),
+        "{e}"
+    );
+    let sc = ScenarioId::SliderCrank.file_text();
+    let e = bad(&sc.replace("rated_rpm = 45.0", "rated_rpm = 5.0"));
+    assert!(
+        e.contains("driver[0].motor: needs 0 <= breakdown_rpm < rated_rpm < synchronous_rpm"),
+        "{e}"
+    );
+    // Converter keys: eight bars, the converter's run keys only in a converter file.
+    let s2 = ScenarioId::CccS2.file_text();
+    let e = bad(&s2.replacen(
+        "[[converter.link]]\nlength = 0.075\nmass = 0.688\ninertia = 0.0010\n",
+        "",
+        1,
+    ));
+    assert!(
+        e.contains("converter.link: needs the 8 bars") && e.contains("got 7"),
+        "{e}"
+    );
+    let e = bad(&s2.replace("length = 0.350", "length = -0.35"));
+    assert!(
+        e.contains("converter.link[1] (link 2).length: must be > 0, got -0.35"),
+        "{e}"
+    );
+    let e = bad(&s2.replace("drive = \"cw\"", "drive = \"up\""));
+    assert!(
+        e.contains("unknown variant `up`") && e.contains("`cw` or `ccw`"),
+        "{e}"
+    );
+    let e = bad(&five().replace("[run]", "[run]\nload = 5.0"));
+    assert!(e.contains("run.load: only in a converter file"), "{e}");
+    let e = bad(&format!("{s2}\n[[ground]]\nname = \"A\"\nat = [0, 0]\n"));
+    assert!(e.contains("ground: not in a converter file"), "{e}");
+    // Syntax: line and column.
+    let e = bad("name = \"x\"\n[run\nh = 1\n");
+    assert!(e.starts_with("bad.toml:2:"), "{e}");
+    // The command line reports the same message, exit status 2, nothing run.
+    let dir = TempDir::new("badfile");
+    let path = dir.join("neg.toml");
+    std::fs::write(&path, five().replace("mass = 0.740", "mass = -1")).unwrap();
+    let (code, out, err) = common::run(&["run", &path]);
+    assert_eq!((code, out.as_str()), (2, ""));
+    assert!(
+        err.contains(&format!(
+            "{path}: link \"coupler\".mass: must be >= 0, got -1"
+        )),
+        "{err}"
+    );
+    let (code, _, err) = common::run(&["run", &dir.join("missing.toml")]);
+    assert_eq!(code, 2);
+    assert!(err.contains("missing.toml: cannot read"), "{err}");
+}
+
+/// No file makes the parser or the run panic: every truncation of every built-in file,
+/// and a few hostile values.
+#[test]
+fn no_input_panics() {
+    for id in ScenarioId::ALL {
+        let text = id.file_text();
+        let mut cut = 0;
+        while cut < text.len() {
+            if text.is_char_boundary(cut) {
+                let _ = parse_run_file(&text[..cut], "cut.toml");
+            }
+            cut += 7;
+        }
+    }
+    for value in [
+        "1e400", "-1e308", "nan", "inf", "0", "-0.0", "1e-320", "[1, 2]", "{}", "\"x\"",
+    ] {
+        for key in [
+            "mass = 0.740",
+            "length = 1.850",
+            "h = 0.001",
+            "at = [2.5, 0.0]",
+            "angle_deg = 30.0",
+        ] {
+            let name = key.split(" = ").next().unwrap();
+            let text = five().replacen(key, &format!("{name} = {value}"), 1);
+            if let Ok(f) = parse_run_file(&text, "x.toml") {
+                // A file that validates either builds and steps or says why not.
+                let _ = host_sim::analysis::scenario::<f64>(&f).map(|s| {
+                    s.simulation().map(|mut sim| {
+                        for _ in 0..3 {
+                            let _ = sim.step();
+                        }
+                    })
+                });
+            }
+        }
+    }
+    let converter_drive = ScenarioId::CccS2.run_file().unwrap();
+    let Body::Converter(c) = converter_drive.body else {
+        panic!()
+    };
+    assert_eq!(c.params.drive, DriveDirection::Cw);
+}
