@@ -257,6 +257,22 @@ pub fn run_one(opts: &RunOptions, csv: &Path) -> Outcome {
     }
 }
 
+/// Runs `opts` writing nothing (the CSV and logs go to [`io::sink`]): the outcome
+/// only, as a parameter sweep needs it. The same code path as [`run_one`], so the same
+/// summary.
+pub fn run_quiet(opts: &RunOptions) -> Outcome {
+    let mut csv = io::sink();
+    if opts.scenario.is_converter() {
+        let sink = ccc::Sink {
+            w: &mut csv,
+            target: "nowhere".into(),
+        };
+        Outcome::Converter(ccc::dispatch(opts, sink, None, None))
+    } else {
+        Outcome::Mechanism(crate::dispatch(opts, &mut csv, "nowhere", None))
+    }
+}
+
 /// The columns of `batch.csv` (described in `host-sim help`).
 pub const TABLE_COLUMNS: [&str; 15] = [
     "job",

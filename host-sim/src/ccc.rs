@@ -737,7 +737,7 @@ fn run_to_files_with(
     )
 }
 
-fn dispatch(
+pub(crate) fn dispatch(
     opts: &RunOptions,
     csv: Sink<'_>,
     logs: Option<(Sink<'_>, Sink<'_>)>,

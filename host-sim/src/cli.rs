@@ -1,6 +1,7 @@
 //! Command-line parsing (hand-written, std only) and the usage text.
 
 use crate::scenarios::{ScenarioId, Source};
+use crate::sweep::{ProgressStyle, SweepOptions};
 use std::ffi::OsString;
 use std::fmt;
 use std::path::PathBuf;
@@ -19,6 +20,10 @@ Usage:
                                      and each group with its links and joints
   host-sim batch FILE --out-dir DIR [--threads N] [--quiet]
                                      run the runs listed in FILE, N at a time
+  host-sim sweep FILE --out-dir DIR [--threads N] [--progress bar|lines|none]
+                   [--keep-runs] [--quiet]
+                                     run a grid of variants of a run (a sweep file)
+                                     and write a table and heat-maps
   host-sim plot RUN.csv --out-dir DIR
                                      plot a CSV that host-sim run wrote (as --plot)
   host-sim help | --help | -h        show this help
@@ -149,6 +154,35 @@ Run files (TOML; the full reference with every key: host-sim/scenarios/README.md
   motor = a torque in N·m, or { type = \"constant\", torque }, { type = \"asynchronous\",
     breakdown_rpm, breakdown_torque, rated_rpm, rated_torque, synchronous_rpm },
     { type = \"polynomial\", a, b, c } (T = a + b ω + c ω², ω in rad/s)
+
+Sweep (host-sim sweep FILE --out-dir DIR): every combination of the axes' values of a
+base run, N at a time; example: host-sim/sweeps/mass-motor.toml
+  base = \"ccc-s2\"     a built-in scenario, or a run file (path relative to FILE)
+  threads = N         runs at a time (default 2; --threads overrides it)
+  [set]               fixed changes to the base: \"run.t_end\" = 0.3, ...
+  [[axis]]            key = \"converter.mass\" (a dotted key of the run file; a number
+                      picks an array element: \"converter.link.2.mass\"), label, and
+                      values = [..] or from, to, steps (evenly spaced, ends included)
+  [[heatmap]]         metric (a numeric column below), x, y (axis keys; default: the
+                      first two numeric axes); default: first_breakaway
+  Every variant is checked as a run file before anything runs (exit status 2 on a
+  bad one, named by its number and axis values). Variants are numbered in grid order
+  (the first axis outermost); the files do not depend on --threads.
+  --out-dir DIR      where the files go (created if missing)
+  --threads N        runs at a time, on N threads
+  --progress STYLE   bar (redrawn in place), lines (one per tenth) or none; default:
+                     bar on a terminal, else lines
+  --keep-runs        also write each variant's CSV and logs, named as by batch
+  --quiet            no progress, no closing summary
+  Files: sweep.csv, one row per variant, columns
+    job, the axes' keys, exit, end, steps, time, first_breakaway, events, switches,
+    shaft_angle, motor_work, load_work, load_power (load_work / time, W),
+    impact_loss, message  (empty where it does not apply);
+  heatmap<n>-<metric>.svg and .png per [[heatmap]] (with -<k> per combination of the
+  other axes' values). The summary gives the lowest and highest value of each
+  heat-map's metric and the variant that gave it. A variant that fails is a row
+  (end = failed), not a failure of the sweep: exit status 0 when the files are
+  written.
 
 Exit status: 0 success, 1 run failure (step error, file error), 2 bad arguments or a
 bad run file.
@@ -285,6 +319,8 @@ pub enum Command {
     Batch(BatchOptions),
     /// `host-sim plot RUN.csv --out-dir DIR`.
     Plot(PlotOptions),
+    /// `host-sim sweep FILE --out-dir DIR [options]`.
+    Sweep(SweepOptions),
 }
 
 /// A bad command line: the one-line message names the argument and what is wrong.
@@ -334,11 +370,12 @@ where
         "batch" => parse_batch(rest),
         "analyze" => parse_analyze(rest),
         "plot" => parse_plot(rest),
+        "sweep" => parse_sweep(rest),
         other if other.starts_with('-') => Err(usage_err(format!(
-            "unknown option '{other}' before the command (commands: list, run, analyze, batch, plot, help)"
+            "unknown option '{other}' before the command (commands: list, run, analyze, batch, sweep, plot, help)"
         ))),
         other => Err(usage_err(format!(
-            "unknown command '{other}' (commands: list, run, analyze, batch, plot, help)"
+            "unknown command '{other}' (commands: list, run, analyze, batch, sweep, plot, help)"
         ))),
     }
 }
@@ -533,6 +570,66 @@ fn parse_plot(args: &[String]) -> Result<Command, UsageError> {
     Ok(Command::Plot(PlotOptions {
         csv: csv.ok_or_else(|| usage_err("plot: missing CSV file"))?,
         out_dir: out_dir.ok_or_else(|| usage_err("plot: missing --out-dir DIR"))?,
+    }))
+}
+
+fn parse_sweep(args: &[String]) -> Result<Command, UsageError> {
+    let (mut file, mut out_dir, mut threads) = (None, None, None);
+    let (mut quiet, mut keep_runs, mut progress) = (false, false, ProgressStyle::Auto);
+    let mut k = 0;
+    while k < args.len() {
+        let arg = args[k].as_str();
+        k += 1;
+        if is_help(arg) {
+            return Ok(Command::Help);
+        }
+        if arg == "-" || !arg.starts_with('-') {
+            if file.is_some() {
+                return Err(usage_err(format!(
+                    "sweep: unexpected argument '{arg}' (one sweep file)"
+                )));
+            }
+            file = Some(parse_path("sweep", arg)?);
+            continue;
+        }
+        let (name, inline) = split_option(arg);
+        match name {
+            "--quiet" | "--keep-runs" => {
+                no_value(name, inline, arg)?;
+                match name {
+                    "--quiet" => quiet = true,
+                    _ => keep_runs = true,
+                }
+            }
+            "--out-dir" | "--threads" | "--progress" => {
+                let value = option_value(name, inline, args, &mut k)?;
+                match name {
+                    "--out-dir" => out_dir = Some(parse_path(name, &value)?),
+                    "--threads" => threads = Some(parse_threads(&value)?),
+                    _ => {
+                        progress = match value.as_str() {
+                            "bar" => ProgressStyle::Bar,
+                            "lines" => ProgressStyle::Lines,
+                            "none" => ProgressStyle::None,
+                            _ => {
+                                return Err(usage_err(format!(
+                                    "--progress: '{value}' is not bar, lines or none"
+                                )))
+                            }
+                        }
+                    }
+                }
+            }
+            _ => return Err(usage_err(format!("sweep: unknown option '{name}'"))),
+        }
+    }
+    Ok(Command::Sweep(SweepOptions {
+        file: file.ok_or_else(|| usage_err("sweep: missing sweep file"))?,
+        out_dir: out_dir.ok_or_else(|| usage_err("sweep: missing --out-dir DIR"))?,
+        threads,
+        progress,
+        keep_runs,
+        quiet,
     }))
 }
 

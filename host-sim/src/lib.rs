@@ -113,6 +113,7 @@ where
         },
         Ok(Command::Batch(opts)) => batch::execute(&opts, stdout, stderr),
         Ok(Command::Plot(opts)) => pictures::plot_csv(&opts, stdout, stderr),
+        Ok(Command::Sweep(opts)) => sweep::execute(&opts, stdout, stderr),
         Err(e) => {
             let _ = writeln!(stderr, "host-sim: {e}\n{HINT}");
             EXIT_USAGE
@@ -258,7 +259,7 @@ fn run_to_file_with(
     }
 }
 
-fn dispatch(
+pub(crate) fn dispatch(
     opts: &RunOptions,
     csv: &mut dyn Write,
     target: &str,

@@ -615,29 +615,82 @@ pub fn parse_value(text: &str, origin: &str) -> Result<toml::Value, FileError> {
         .map_err(|e| toml_error(&e, text, origin))
 }
 
-/// Sets the value at a dotted key path (`converter.mass`, `run.load`) in a toml tree,
-/// creating missing tables; an error if a step of the path is not a table.
-pub fn set_dotted(tree: &mut toml::Value, path: &str, value: toml::Value) -> Result<(), String> {
-    let mut node = tree;
-    let keys: Vec<&str> = path.split('.').collect();
-    let Some((last, parents)) = keys.split_last() else {
-        return Err("empty key".to_string());
+/// Writes `value` at the dotted `key` of a run file's tree (from [`parse_value`]),
+/// creating the tables on its way: `converter.mass` is `tree[converter][mass]`; a segment that is a number selects that element (from 0) of an
+/// array. Errors name the key and the segment.
+pub fn set_dotted(tree: &mut toml::Value, key: &str, value: toml::Value) -> Result<(), String> {
+    match tree {
+        toml::Value::Table(root) => set_dotted_in(root, key, value),
+        other => Err(format!(
+            "key '{key}': the file is a {}, not a table",
+            other.type_str()
+        )),
+    }
+}
+
+/// [`set_dotted`] in a tree's root table.
+pub fn set_dotted_in(root: &mut toml::Table, key: &str, value: toml::Value) -> Result<(), String> {
+    let segments: Vec<&str> = key.split('.').collect();
+    if segments.iter().any(|s| s.trim().is_empty()) {
+        return Err(format!("key '{key}': an empty segment"));
+    }
+    let Some((last, path)) = segments.split_last() else {
+        return Err(format!("key '{key}': empty"));
     };
-    for (k, key) in parents.iter().enumerate() {
-        let toml::Value::Table(t) = node else {
-            return Err(format!("{}: not a table", keys[..k].join(".")));
+    let mut here = Node::Table(root);
+    for (k, seg) in path.iter().enumerate() {
+        let so_far = segments[..=k].join(".");
+        here = match here {
+            Node::Table(t) => {
+                let next = t
+                    .entry(seg.to_string())
+                    .or_insert_with(|| toml::Value::Table(toml::Table::new()));
+                Node::of(next, &so_far, key)?
+            }
+            Node::Array(a) => {
+                let n = a.len();
+                let next = index(seg, n).and_then(|i| a.get_mut(i)).ok_or_else(|| {
+                    format!("key '{key}': '{so_far}' is out of the array of {n} elements")
+                })?;
+                Node::of(next, &so_far, key)?
+            }
         };
-        node = t
-            .entry(key.to_string())
-            .or_insert_with(|| toml::Value::Table(toml::Table::new()));
     }
-    match node {
-        toml::Value::Table(t) => {
+    match here {
+        Node::Table(t) => {
             t.insert(last.to_string(), value);
-            Ok(())
         }
-        _ => Err(format!("{}: not a table", parents.join("."))),
+        Node::Array(a) => {
+            let n = a.len();
+            let slot = index(last, n).and_then(|i| a.get_mut(i)).ok_or_else(|| {
+                format!("key '{key}': '{last}' is out of the array of {n} elements")
+            })?;
+            *slot = value;
+        }
     }
+    Ok(())
+}
+
+enum Node<'a> {
+    Table(&'a mut toml::Table),
+    Array(&'a mut Vec<toml::Value>),
+}
+
+impl<'a> Node<'a> {
+    fn of(v: &'a mut toml::Value, so_far: &str, key: &str) -> Result<Node<'a>, String> {
+        match v {
+            toml::Value::Table(t) => Ok(Node::Table(t)),
+            toml::Value::Array(a) => Ok(Node::Array(a)),
+            other => Err(format!(
+                "key '{key}': '{so_far}' is a {}, not a table",
+                other.type_str()
+            )),
+        }
+    }
+}
+
+fn index(seg: &str, len: usize) -> Option<usize> {
+    seg.parse::<usize>().ok().filter(|i| *i < len)
 }
 
 fn one_line(s: &str) -> String {
@@ -650,7 +703,7 @@ fn one_line(s: &str) -> String {
 
 /// A toml error with its line and column (from its byte span into `text`; none for a
 /// tree's error) and its key path.
-fn toml_error(e: &toml::de::Error, text: &str, origin: &str) -> FileError {
+pub(crate) fn toml_error(e: &toml::de::Error, text: &str, origin: &str) -> FileError {
     let position = e.span().filter(|_| !text.is_empty()).map(|s| {
         let before = text.get(..s.start.min(text.len())).unwrap_or("");
         let line = before.matches('\n').count() + 1;

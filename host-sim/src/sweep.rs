@@ -36,10 +36,18 @@
 //! the progress bar on `stderr` depends on the finishing order.
 
 use crate::batch::{self, cell};
+use crate::cli::{RunOptions, HINT};
+use crate::draw;
 use crate::run::RunError;
+use crate::run::Steps;
+use crate::run_jobs;
+use crate::runfile::{self, set_dotted_in as set_dotted};
+use crate::scenarios::{ScenarioId, Source};
 use std::fmt;
-use std::io::{self, Write};
-use std::time::Duration;
+use std::fs::{self, File};
+use std::io::{self, BufWriter, IsTerminal, Write};
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
 use toml::{Table, Value};
 
 /// The most variants a sweep runs (a guard against a grid typo that would run for
@@ -404,73 +412,6 @@ pub fn range(from: f64, to: f64, steps: usize) -> Result<Vec<f64>, String> {
         .collect())
 }
 
-/// Writes `value` at the dotted `key` of `root`, creating the tables on its way: `a.b.c`
-/// is `root[a][b][c]`; a segment that is a number selects that element (from 0) of an
-/// array. Errors name the key and the segment.
-pub fn set_dotted(root: &mut Table, key: &str, value: Value) -> Result<(), String> {
-    let segments: Vec<&str> = key.split('.').collect();
-    if segments.iter().any(|s| s.trim().is_empty()) {
-        return Err(format!("key '{key}': an empty segment"));
-    }
-    let Some((last, path)) = segments.split_last() else {
-        return Err(format!("key '{key}': empty"));
-    };
-    let mut here = Node::Table(root);
-    for (k, seg) in path.iter().enumerate() {
-        let so_far = segments[..=k].join(".");
-        here = match here {
-            Node::Table(t) => {
-                let next = t
-                    .entry(seg.to_string())
-                    .or_insert_with(|| Value::Table(Table::new()));
-                Node::of(next, &so_far, key)?
-            }
-            Node::Array(a) => {
-                let n = a.len();
-                let next = index(seg, n).and_then(|i| a.get_mut(i)).ok_or_else(|| {
-                    format!("key '{key}': '{so_far}' is out of the array of {n} elements")
-                })?;
-                Node::of(next, &so_far, key)?
-            }
-        };
-    }
-    match here {
-        Node::Table(t) => {
-            t.insert(last.to_string(), value);
-        }
-        Node::Array(a) => {
-            let n = a.len();
-            let slot = index(last, n).and_then(|i| a.get_mut(i)).ok_or_else(|| {
-                format!("key '{key}': '{last}' is out of the array of {n} elements")
-            })?;
-            *slot = value;
-        }
-    }
-    Ok(())
-}
-
-enum Node<'a> {
-    Table(&'a mut Table),
-    Array(&'a mut Vec<Value>),
-}
-
-impl<'a> Node<'a> {
-    fn of(v: &'a mut Value, so_far: &str, key: &str) -> Result<Node<'a>, String> {
-        match v {
-            Value::Table(t) => Ok(Node::Table(t)),
-            Value::Array(a) => Ok(Node::Array(a)),
-            other => Err(format!(
-                "key '{key}': '{so_far}' is a {}, not a table",
-                other.type_str()
-            )),
-        }
-    }
-}
-
-fn index(seg: &str, len: usize) -> Option<usize> {
-    seg.parse::<usize>().ok().filter(|i| *i < len)
-}
-
 /// The progress bar of a sweep: `sweep  [#######.............]  12/40  30%  0:34
 /// elapsed  ~1:19 left`. The estimate is the mean time per finished variant times the
 /// variants left (variants differ in cost, so it is rough early on).
@@ -618,7 +559,8 @@ pub fn parse_sweep(
     load_base: impl Fn(&str) -> Result<(Table, String), String>,
 ) -> Result<Sweep, SweepError> {
     let err = |m: String| SweepError(format!("{origin}: {m}"));
-    let file: SweepFile = toml::from_str(text).map_err(|e| err(one_line(&e.to_string())))?;
+    let file: SweepFile = toml::from_str(text)
+        .map_err(|e| SweepError(runfile::toml_error(&e, text, origin).to_string()))?;
     let (mut base_tree, base_origin) =
         load_base(&file.base).map_err(|e| err(format!("base = '{}': {e}", file.base)))?;
     for (key, value) in &file.set {
@@ -727,19 +669,328 @@ pub fn parse_sweep(
     Ok(sweep)
 }
 
-/// The toml crate's multi-line message (a location line, the source line with a caret
-/// under it, the message) in one line: `line 2, column 1: unknown field ...`.
-fn one_line(msg: &str) -> String {
-    let source_line = |l: &str| {
-        let (num, rest) = l.split_once('|').unwrap_or(("x", ""));
-        num.trim().chars().all(|c| c.is_ascii_digit()) && (rest.is_empty() || rest.starts_with(' '))
+/// How a sweep shows its progress on `stderr`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ProgressStyle {
+    /// A bar redrawn in place (`\r`): for a terminal.
+    Bar,
+    /// A line at every tenth of the variants: for a log file or a pipe.
+    Lines,
+    /// Nothing.
+    None,
+    /// `Bar` when `stderr` is a terminal, else `Lines`.
+    Auto,
+}
+
+/// Options of `host-sim sweep`.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct SweepOptions {
+    /// The sweep file.
+    pub file: PathBuf,
+    /// Where the table and pictures go.
+    pub out_dir: PathBuf,
+    /// Runs at a time (`None`: the file's `threads`, else 2).
+    pub threads: Option<usize>,
+    /// The progress display.
+    pub progress: ProgressStyle,
+    /// Also write each variant's CSV and logs (as `host-sim batch` names them).
+    pub keep_runs: bool,
+    /// No progress, no closing summary.
+    pub quiet: bool,
+}
+
+/// The base run file's tree: a built-in scenario's embedded file, or a run file at a
+/// path relative to the sweep file's directory `dir`.
+fn load_base(base: &str, dir: &Path) -> Result<(Table, String), String> {
+    let (text, origin) = match ScenarioId::from_name(base) {
+        Some(id) => (id.file_text().to_string(), id.name().to_string()),
+        None => {
+            let path = dir.join(base);
+            let origin = path.display().to_string();
+            let text = fs::read_to_string(&path).map_err(|e| {
+                format!(
+                    "cannot read {origin}: {e} (a base is a built-in scenario, {}, or a run file)",
+                    ScenarioId::names()
+                )
+            })?;
+            (text, origin)
+        }
     };
-    msg.lines()
-        .map(str::trim)
-        .filter(|l| !l.is_empty() && !source_line(l) && !l.chars().all(|c| c == '^' || c == ' '))
-        .map(|l| l.trim_start_matches("TOML parse error at "))
+    match runfile::parse_value(&text, &origin).map_err(|e| e.to_string())? {
+        Value::Table(t) => Ok((t, origin)),
+        _ => Err(format!("{origin}: not a table")),
+    }
+}
+
+/// A variant ready to run.
+struct Job {
+    /// The axis indices.
+    idx: Vec<usize>,
+    /// Its run options (from its run file; quiet).
+    opts: RunOptions,
+}
+
+/// Runs `host-sim sweep` with `opts`: checks the sweep file and every variant before
+/// anything runs (a bad file or variant: exit code 2), runs the variants on N threads
+/// with a progress display on `stderr`, writes `sweep.csv` and the heat-maps (SVG and
+/// PNG) into `out_dir`, reports the variants that failed on `stderr` and a summary on
+/// `stdout` (unless quiet). A variant whose run fails is a row of the table (its `end`
+/// says how), not a failure of the sweep: exit code 0 when the files are written, 1
+/// when a file cannot be written.
+pub fn execute(opts: &SweepOptions, stdout: &mut dyn Write, stderr: &mut dyn Write) -> u8 {
+    let origin = opts.file.display().to_string();
+    let text = match fs::read_to_string(&opts.file) {
+        Ok(t) => t,
+        Err(e) => {
+            let _ = writeln!(stderr, "host-sim: cannot read sweep file {origin}: {e}");
+            return crate::EXIT_FAILURE;
+        }
+    };
+    let dir = opts.file.parent().unwrap_or(Path::new("."));
+    let sweep = match parse_sweep(&text, &origin, |b| load_base(b, dir)) {
+        Ok(s) => s,
+        Err(e) => {
+            let _ = writeln!(stderr, "host-sim: {e}\nnothing was run; {HINT}");
+            return crate::EXIT_USAGE;
+        }
+    };
+    let jobs = match prepare(&sweep) {
+        Ok(j) => j,
+        Err(bad) => {
+            for b in bad.iter().take(5) {
+                let _ = writeln!(stderr, "host-sim: {b}");
+            }
+            if bad.len() > 5 {
+                let _ = writeln!(
+                    stderr,
+                    "host-sim: ... and {} more bad variants",
+                    bad.len() - 5
+                );
+            }
+            let _ = writeln!(stderr, "nothing was run; {HINT}");
+            return crate::EXIT_USAGE;
+        }
+    };
+    let out = &opts.out_dir;
+    if let Err(e) = fs::create_dir_all(out) {
+        let _ = writeln!(stderr, "host-sim: cannot create {}: {e}", out.display());
+        return crate::EXIT_FAILURE;
+    }
+    let threads = opts.threads.or(sweep.threads).unwrap_or(2);
+    let total = jobs.len();
+    let style = match opts.progress {
+        _ if opts.quiet => ProgressStyle::None,
+        ProgressStyle::Auto if io::stderr().is_terminal() => ProgressStyle::Bar,
+        ProgressStyle::Auto => ProgressStyle::Lines,
+        s => s,
+    };
+    let start = Instant::now();
+    let mut shown = 0;
+    let runs = run_jobs(
+        &jobs,
+        threads,
+        |k, job: &Job| {
+            let o = if opts.keep_runs {
+                let src = &job.opts.scenario;
+                batch::run_one(&job.opts, &out.join(batch::file_name(k, total, src)))
+            } else {
+                batch::run_quiet(&job.opts)
+            };
+            Outcome::from(&o)
+        },
+        |p, _| {
+            let line = progress_bar(p.done, p.total, start.elapsed());
+            match style {
+                ProgressStyle::Bar => {
+                    let end = if p.done == p.total { "\n" } else { "" };
+                    let _ = write!(stderr, "\r{line}{end}");
+                    let _ = stderr.flush();
+                }
+                ProgressStyle::Lines if 10 * p.done / p.total > shown || p.done == p.total => {
+                    shown = 10 * p.done / p.total;
+                    let _ = writeln!(stderr, "{line}");
+                }
+                _ => {}
+            }
+        },
+    );
+    let wall = start.elapsed();
+    let variants: Vec<Vec<usize>> = jobs.into_iter().map(|j| j.idx).collect();
+    let table = out.join("sweep.csv");
+    let written = File::create(&table).and_then(|f| {
+        let mut w = BufWriter::new(f);
+        write_table(&mut w, &sweep, &variants, &runs)?;
+        w.flush()
+    });
+    if let Err(e) = written {
+        let _ = writeln!(stderr, "host-sim: cannot write {}: {e}", table.display());
+        return crate::EXIT_FAILURE;
+    }
+    let mut pictures = Vec::new();
+    for (n, spec) in sweep.heatmaps.iter().enumerate() {
+        let grids = heat_grids(&sweep, spec, &variants, &runs);
+        let several = grids.len() > 1;
+        for (k, g) in grids.iter().enumerate() {
+            let mut stem = format!("heatmap{}-{}", n + 1, spec.metric.name());
+            if several {
+                stem.push_str(&format!("-{}", k + 1));
+            }
+            let figure = draw::heatmap(&heat_map(&sweep, spec, g));
+            for ext in ["svg", "png"] {
+                let path = out.join(format!("{stem}.{ext}"));
+                if let Err(e) = figure.write(&path) {
+                    let _ = writeln!(stderr, "host-sim: {e}");
+                    return crate::EXIT_FAILURE;
+                }
+            }
+            pictures.push(out.join(format!("{stem}.svg")));
+        }
+    }
+    let failed: Vec<usize> = (0..runs.len())
+        .filter(|&k| runs[k].exit != crate::EXIT_OK)
+        .collect();
+    for &k in &failed {
+        let _ = writeln!(
+            stderr,
+            "host-sim: variant {k} ({}): {}",
+            sweep.describe(&variants[k]),
+            runs[k].message.as_deref().unwrap_or(runs[k].end)
+        );
+    }
+    if !opts.quiet {
+        let _ = report(
+            stdout,
+            &sweep,
+            &variants,
+            &runs,
+            threads.clamp(1, total.max(1)),
+            wall,
+            &table,
+            &pictures,
+        );
+    }
+    crate::EXIT_OK
+}
+
+/// Every variant's run options, from its run file; errors: every bad variant, named by
+/// its number and axis values, with the run file's message.
+fn prepare(sweep: &Sweep) -> Result<Vec<Job>, Vec<String>> {
+    let variants = sweep.variants().map_err(|e| vec![e.to_string()])?;
+    let (mut jobs, mut bad) = (Vec::new(), Vec::new());
+    for (k, (idx, tree)) in variants.into_iter().enumerate() {
+        let name = format!("{} variant {k} ({})", sweep.origin, sweep.describe(&idx));
+        let file = match runfile::run_file_from_value(Value::Table(tree), &name) {
+            Ok(f) => f,
+            Err(e) => {
+                bad.push(e.to_string());
+                continue;
+            }
+        };
+        let mut opts = RunOptions::from_source(Source::from_file(format!("v{k}"), file));
+        opts.quiet = true;
+        match Steps::check(&opts) {
+            Ok(_) => jobs.push(Job { idx, opts }),
+            Err(e) => bad.push(format!("{name}: {e}")),
+        }
+    }
+    if bad.is_empty() {
+        Ok(jobs)
+    } else {
+        Err(bad)
+    }
+}
+
+/// The heat-map of one grid: the axes' labels, the metric's description, and the base
+/// and the other axes' values in the title.
+fn heat_map(sweep: &Sweep, spec: &HeatSpec, g: &HeatGrid) -> draw::HeatMap {
+    let label = |k: Option<usize>| {
+        k.and_then(|k| sweep.axes.get(k))
+            .map_or_else(String::new, |a| a.label.clone())
+    };
+    let mut title = format!("{} ({})", spec.metric.describe(), sweep.base);
+    if !g.fixed.is_empty() {
+        title.push_str(&format!(", {}", g.fixed));
+    }
+    draw::HeatMap {
+        title,
+        x_label: label(Some(spec.x)),
+        y_label: label(spec.y),
+        z_label: spec.metric.describe().to_string(),
+        x: g.x.clone(),
+        y: g.y.clone(),
+        z: g.z.clone(),
+    }
+}
+
+/// The closing summary: counts, files, and the lowest and highest value of each
+/// heat-map's metric with the variant that gave it.
+#[allow(clippy::too_many_arguments)]
+fn report(
+    w: &mut dyn Write,
+    sweep: &Sweep,
+    variants: &[Vec<usize>],
+    runs: &[Outcome],
+    threads: usize,
+    wall: Duration,
+    table: &Path,
+    pictures: &[PathBuf],
+) -> io::Result<()> {
+    let total = runs.len();
+    let completed = runs.iter().filter(|o| o.end == "completed").count();
+    let axes = sweep
+        .axes
+        .iter()
+        .map(|a| format!("{} {}", a.values.len(), a.key))
         .collect::<Vec<_>>()
-        .join(": ")
+        .join(" × ");
+    writeln!(
+        w,
+        "sweep     {total} variants of {} ({axes}) on {threads} thread{} in {:.3} s: {completed} completed, {} ended otherwise",
+        sweep.base,
+        if threads == 1 { "" } else { "s" },
+        wall.as_secs_f64(),
+        total - completed
+    )?;
+    writeln!(w, "table     {}", table.display())?;
+    for p in pictures {
+        writeln!(w, "heatmap   {} (and .png)", p.display())?;
+    }
+    let mut metrics: Vec<Metric> = Vec::new();
+    for h in &sweep.heatmaps {
+        if !metrics.contains(&h.metric) {
+            metrics.push(h.metric);
+        }
+    }
+    for m in metrics {
+        let values = runs
+            .iter()
+            .enumerate()
+            .filter_map(|(k, o)| Some((k, o.get(m)?)));
+        // The first of equal values wins: grid order, so deterministic.
+        let lo = values
+            .clone()
+            .fold(None, |b: Option<(usize, f64)>, (k, v)| match b {
+                Some((_, bv)) if bv <= v => b,
+                _ => Some((k, v)),
+            });
+        let hi = values.fold(None, |b: Option<(usize, f64)>, (k, v)| match b {
+            Some((_, bv)) if bv >= v => b,
+            _ => Some((k, v)),
+        });
+        match (lo, hi) {
+            (Some((kl, vl)), Some((kh, vh))) => writeln!(
+                w,
+                "{}: lowest {} at {}; highest {} at {}",
+                m.describe(),
+                draw::heatmap::short(vl),
+                sweep.describe(&variants[kl]),
+                draw::heatmap::short(vh),
+                sweep.describe(&variants[kh])
+            )?,
+            _ => writeln!(w, "{}: no variant gave a value", m.describe())?,
+        }
+    }
+    w.flush()
 }
 
 /// A sweep file error: the file and what is wrong.

@@ -5,9 +5,8 @@
 
 mod common;
 
-use common::{read, run, utf8, TempDir};
+use common::{files, read, run, utf8, TempDir};
 use host_sim::batch::TABLE_COLUMNS;
-use std::collections::BTreeMap;
 use std::path::Path;
 
 /// A batch of every scenario, short runs. The longest run comes first, so that on 2
@@ -54,19 +53,6 @@ fn batch_file(dir: &TempDir, text: &str) -> String {
 fn batch(file: &str, out_dir: &str, threads: usize) -> (u8, String, String) {
     let n = threads.to_string();
     run(&["batch", file, "--out-dir", out_dir, "--threads", &n])
-}
-
-/// Every file of `dir` by name, with its bytes.
-fn files(dir: &Path) -> BTreeMap<String, Vec<u8>> {
-    std::fs::read_dir(dir)
-        .unwrap_or_else(|e| panic!("read dir {}: {e}", dir.display()))
-        .map(|e| {
-            let e = e.expect("dir entry");
-            let name = e.file_name().into_string().expect("utf-8 file name");
-            let bytes = read(&e.path());
-            (name, bytes)
-        })
-        .collect()
 }
 
 /// The two directories hold the same file names with the same bytes.

@@ -1,8 +1,9 @@
-//! Helpers shared by the test files `golden.rs`, `batch.rs` and `ccc_cli.rs` (each uses
+//! Helpers shared by the test files `golden.rs`, `batch.rs`, `sweep.rs` and `ccc_cli.rs` (each uses
 //! a part, hence the `dead_code` allowance).
 
 #![allow(dead_code)]
 
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 
@@ -53,4 +54,17 @@ pub fn utf8(p: &Path) -> &str {
 /// Reads a file the test expects to exist.
 pub fn read(p: &Path) -> Vec<u8> {
     std::fs::read(p).unwrap_or_else(|e| panic!("read {}: {e}", p.display()))
+}
+
+/// Every file of `dir` by name, with its bytes.
+pub fn files(dir: &Path) -> BTreeMap<String, Vec<u8>> {
+    std::fs::read_dir(dir)
+        .unwrap_or_else(|e| panic!("read dir {}: {e}", dir.display()))
+        .map(|e| {
+            let e = e.expect("dir entry");
+            let name = e.file_name().into_string().expect("utf-8 file name");
+            let bytes = read(&e.path());
+            (name, bytes)
+        })
+        .collect()
 }
