@@ -539,92 +539,64 @@ fn parse_run(args: &[String]) -> Result<Command, UsageError> {
 }
 
 fn parse_plot(args: &[String]) -> Result<Command, UsageError> {
-    let (mut csv, mut out_dir) = (None, None);
-    let mut k = 0;
-    while k < args.len() {
-        let arg = args[k].as_str();
-        k += 1;
-        if is_help(arg) {
-            return Ok(Command::Help);
-        }
-        if arg == "-" || !arg.starts_with('-') {
-            if csv.is_some() {
-                return Err(usage_err(format!(
-                    "plot: unexpected argument '{arg}' (one CSV)"
-                )));
-            }
-            csv = Some(parse_path("plot", arg)?);
-            continue;
-        }
-        let (name, inline) = split_option(arg);
+    let mut out_dir = None;
+    let Some(csv) = parse_file_command("plot", "CSV file", args, |name, inline, _, args, k| {
         match name {
-            "--out-dir" => {
-                out_dir = Some(parse_path(
-                    name,
-                    &option_value(name, inline, args, &mut k)?,
-                )?)
-            }
+            "--out-dir" => out_dir = Some(parse_path(name, &option_value(name, inline, args, k)?)?),
             _ => return Err(usage_err(format!("plot: unknown option '{name}'"))),
         }
-    }
+        Ok(())
+    })?
+    else {
+        return Ok(Command::Help);
+    };
     Ok(Command::Plot(PlotOptions {
-        csv: csv.ok_or_else(|| usage_err("plot: missing CSV file"))?,
+        csv,
         out_dir: out_dir.ok_or_else(|| usage_err("plot: missing --out-dir DIR"))?,
     }))
 }
 
 fn parse_sweep(args: &[String]) -> Result<Command, UsageError> {
-    let (mut file, mut out_dir, mut threads) = (None, None, None);
+    let (mut out_dir, mut threads) = (None, None);
     let (mut quiet, mut keep_runs, mut progress) = (false, false, ProgressStyle::Auto);
-    let mut k = 0;
-    while k < args.len() {
-        let arg = args[k].as_str();
-        k += 1;
-        if is_help(arg) {
-            return Ok(Command::Help);
-        }
-        if arg == "-" || !arg.starts_with('-') {
-            if file.is_some() {
-                return Err(usage_err(format!(
-                    "sweep: unexpected argument '{arg}' (one sweep file)"
-                )));
-            }
-            file = Some(parse_path("sweep", arg)?);
-            continue;
-        }
-        let (name, inline) = split_option(arg);
-        match name {
-            "--quiet" | "--keep-runs" => {
-                no_value(name, inline, arg)?;
-                match name {
-                    "--quiet" => quiet = true,
-                    _ => keep_runs = true,
-                }
-            }
-            "--out-dir" | "--threads" | "--progress" => {
-                let value = option_value(name, inline, args, &mut k)?;
-                match name {
-                    "--out-dir" => out_dir = Some(parse_path(name, &value)?),
-                    "--threads" => threads = Some(parse_threads(&value)?),
-                    _ => {
-                        progress = match value.as_str() {
-                            "bar" => ProgressStyle::Bar,
-                            "lines" => ProgressStyle::Lines,
-                            "none" => ProgressStyle::None,
-                            _ => {
-                                return Err(usage_err(format!(
-                                    "--progress: '{value}' is not bar, lines or none"
-                                )))
-                            }
-                        }
+    let Some(file) =
+        parse_file_command("sweep", "sweep file", args, |name, inline, arg, args, k| {
+            match name {
+                "--quiet" | "--keep-runs" => {
+                    no_value(name, inline, arg)?;
+                    match name {
+                        "--quiet" => quiet = true,
+                        _ => keep_runs = true,
                     }
                 }
+                "--out-dir" => {
+                    out_dir = Some(parse_path(name, &option_value(name, inline, args, k)?)?)
+                }
+                "--threads" => {
+                    threads = Some(parse_threads(&option_value(name, inline, args, k)?)?)
+                }
+                "--progress" => {
+                    let value = option_value(name, inline, args, k)?;
+                    progress = match value.as_str() {
+                        "bar" => ProgressStyle::Bar,
+                        "lines" => ProgressStyle::Lines,
+                        "none" => ProgressStyle::None,
+                        _ => {
+                            return Err(usage_err(format!(
+                                "--progress: '{value}' is not bar, lines or none"
+                            )))
+                        }
+                    };
+                }
+                _ => return Err(usage_err(format!("sweep: unknown option '{name}'"))),
             }
-            _ => return Err(usage_err(format!("sweep: unknown option '{name}'"))),
-        }
-    }
+            Ok(())
+        })?
+    else {
+        return Ok(Command::Help);
+    };
     Ok(Command::Sweep(SweepOptions {
-        file: file.ok_or_else(|| usage_err("sweep: missing sweep file"))?,
+        file,
         out_dir: out_dir.ok_or_else(|| usage_err("sweep: missing --out-dir DIR"))?,
         threads,
         progress,
@@ -684,43 +656,29 @@ fn parse_slow(value: &str) -> Result<f64, UsageError> {
 }
 
 fn parse_batch(args: &[String]) -> Result<Command, UsageError> {
-    let (mut file, mut out_dir, mut threads, mut quiet) = (None, None, 2, false);
-    let mut k = 0;
-    while k < args.len() {
-        let arg = args[k].as_str();
-        k += 1;
-        if is_help(arg) {
-            return Ok(Command::Help);
-        }
-        if arg == "-" || !arg.starts_with('-') {
-            if file.is_some() {
-                return Err(usage_err(format!(
-                    "batch: unexpected argument '{arg}' (one batch file)"
-                )));
-            }
-            file = Some(PathBuf::from(arg));
-            continue;
-        }
-        let (name, inline) = split_option(arg);
-        match name {
-            "--quiet" => {
-                no_value(name, inline, arg)?;
-                quiet = true;
-            }
-            "--out-dir" | "--threads" => {
-                let value = option_value(name, inline, args, &mut k)?;
-                if name == "--threads" {
-                    threads = parse_threads(&value)?;
-                } else if value.is_empty() {
-                    return Err(usage_err("--out-dir: empty directory name"));
-                } else {
+    let (mut out_dir, mut threads, mut quiet) = (None, 2, false);
+    let Some(file) =
+        parse_file_command("batch", "batch file", args, |name, inline, arg, args, k| {
+            match name {
+                "--quiet" => {
+                    no_value(name, inline, arg)?;
+                    quiet = true;
+                }
+                "--threads" => threads = parse_threads(&option_value(name, inline, args, k)?)?,
+                "--out-dir" => {
+                    let value = option_value(name, inline, args, k)?;
+                    if value.is_empty() {
+                        return Err(usage_err("--out-dir: empty directory name"));
+                    }
                     out_dir = Some(PathBuf::from(value));
                 }
+                _ => return Err(usage_err(format!("batch: unknown option '{name}'"))),
             }
-            _ => return Err(usage_err(format!("batch: unknown option '{name}'"))),
-        }
-    }
-    let file = file.ok_or_else(|| usage_err("batch: missing batch file"))?;
+            Ok(())
+        })?
+    else {
+        return Ok(Command::Help);
+    };
     let out_dir = out_dir.ok_or_else(|| usage_err("batch: missing --out-dir DIR"))?;
     Ok(Command::Batch(BatchOptions {
         file,
@@ -728,6 +686,40 @@ fn parse_batch(args: &[String]) -> Result<Command, UsageError> {
         threads,
         quiet,
     }))
+}
+
+/// The arguments of a command that takes one file and options (`batch`, `sweep`,
+/// `plot`): `option(name, inline value, the argument, args, &mut k)` handles each option
+/// (it may consume the next argument through [`option_value`]). `None` when help is
+/// asked for; an error when the file is missing or given twice.
+fn parse_file_command(
+    command: &str,
+    what: &str,
+    args: &[String],
+    mut option: impl FnMut(&str, Option<String>, &str, &[String], &mut usize) -> Result<(), UsageError>,
+) -> Result<Option<PathBuf>, UsageError> {
+    let mut file = None;
+    let mut k = 0;
+    while k < args.len() {
+        let arg = args[k].as_str();
+        k += 1;
+        if is_help(arg) {
+            return Ok(None);
+        }
+        if arg == "-" || !arg.starts_with('-') {
+            if file.is_some() {
+                return Err(usage_err(format!(
+                    "{command}: unexpected argument '{arg}' (one {what})"
+                )));
+            }
+            file = Some(parse_path(command, arg)?);
+            continue;
+        }
+        let (name, inline) = split_option(arg);
+        option(name, inline, arg, args, &mut k)?;
+    }
+    file.map(Some)
+        .ok_or_else(|| usage_err(format!("{command}: missing {what}")))
 }
 
 fn parse_threads(value: &str) -> Result<usize, UsageError> {

@@ -731,6 +731,14 @@ pub(crate) fn toml_error(e: &toml::de::Error, text: &str, origin: &str) -> FileE
 // ---------------------------------------------------------------------------------
 // Validation.
 
+/// The message for a link name that is not one of `links`.
+fn unknown_link(name: &str, links: &[LinkSpec]) -> String {
+    format!(
+        "unknown link \"{name}\" (links: {})",
+        list(links.iter().map(|l| l.name.as_str()))
+    )
+}
+
 struct Check<'a> {
     origin: &'a str,
 }
@@ -1303,14 +1311,7 @@ fn mechanism(
         let df = format!("driver[{k}]");
         let f = |key: &str| format!("{df}.{key}");
         let Some(link) = body_of(&d.link) else {
-            return Err(ck.err(
-                f("link"),
-                format!(
-                    "unknown link \"{}\" (links: {})",
-                    d.link,
-                    list(links.iter().map(|l| l.name.as_str()))
-                ),
-            ));
+            return Err(ck.err(f("link"), unknown_link(&d.link, &links)));
         };
         let Some(joint) = joints.iter().position(|j| j.name == d.joint) else {
             return Err(ck.err(
@@ -1403,14 +1404,7 @@ fn mechanism(
     for (k, l) in raw_loads.into_iter().enumerate() {
         let f = |key: &str| format!("load[{k}].{key}");
         let Some(link) = body_of(&l.link) else {
-            return Err(ck.err(
-                f("link"),
-                format!(
-                    "unknown link \"{}\" (links: {})",
-                    l.link,
-                    list(links.iter().map(|l| l.name.as_str()))
-                ),
-            ));
+            return Err(ck.err(f("link"), unknown_link(&l.link, &links)));
         };
         loads.push(LoadSpec {
             link,

@@ -1196,7 +1196,7 @@ x = "run.motor"
         ];
         for (text, want) in cases {
             let e = parse_sweep(text, "s.toml", base).unwrap_err().to_string();
-            assert!(e.starts_with("s.toml: "), "{e}");
+            assert!(e.starts_with("s.toml:"), "{e}");
             assert!(e.contains(want), "{text:?}: {e:?} lacks {want:?}");
             assert!(!e.contains('\n'), "{e:?}");
         }
