@@ -468,13 +468,14 @@ fn draw_strip(f: &mut Figure, frames: &Frames, t: f64) {
             Anchor::Middle,
         ));
     }
+    // Left of the first tick label (centred at `left`), on its line.
     f.text(Text::new(
-        pt(left - 6.0, bottom + 12.0),
+        pt(left - 22.0, bottom + 12.0),
         "t, s",
         TextSize::Small,
         Anchor::End,
     ));
-    for (k, name) in ["c6", "c8"].iter().enumerate() {
+    for k in 0..2 {
         let run: Vec<(f64, f64)> = frames
             .strip
             .iter()
@@ -492,14 +493,24 @@ fn draw_strip(f: &mut Figure, frames: &Frames, t: f64) {
                 stroke: Stroke::solid(c, 1.5),
             });
         }
-        let ly = top + 8.0 + 16.0 * k as f64;
+    }
+    // The legend on a white box over the curves' top-right corner, drawn after them.
+    f.rect(
+        pt(right - 84.0, top + 1.0),
+        83.0,
+        33.0,
+        Some(Color::WHITE),
+        Some(Stroke::solid(Color::GRID, 1.0)),
+    );
+    for (k, name) in ["c6", "c8"].iter().enumerate() {
+        let ly = top + 9.0 + 16.0 * k as f64;
         f.line(
-            pt(right - 70.0, ly),
-            pt(right - 52.0, ly),
-            Stroke::solid(c, 2.5),
+            pt(right - 78.0, ly),
+            pt(right - 60.0, ly),
+            Stroke::solid(PALETTE[k], 2.5),
         );
         f.text(Text::new(
-            pt(right - 46.0, ly),
+            pt(right - 54.0, ly),
             format!("{name}, N·m"),
             TextSize::Small,
             Anchor::Start,
