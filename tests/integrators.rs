@@ -150,3 +150,66 @@ fn thesis_start_step_overshoots() {
     println!("thesis h0 = 0.05: {e}");
     assert!(e.time() < 0.2);
 }
+
+/// `Simulation::step_adaptive`: output every 10 ms while the adaptive DP5(4) (rtol 1e-10)
+/// takes its own steps. At 0.5 s it agrees with the direct adaptive run of
+/// `Adaptive::integrate_to` at rtol 1e-12 (the oracle: no simulation wrapper, one
+/// interval) to 1e-7 rad, it lands on the output grid exactly, its workspace describes
+/// the end state, and a failing interval leaves the last output state as it was.
+#[test]
+fn simulation_steps_adaptively_between_output_times() {
+    let sc = five_bar::<f64>().unwrap();
+    let (mut ws, mut y) = start(&sc);
+    let mut t = 0.0;
+    let mut reference = Adaptive::new(AdaptiveSettings {
+        rtol: 1e-12,
+        atol: 1e-12,
+        ..AdaptiveSettings::default()
+    })
+    .unwrap();
+    let mut sys = Equations {
+        model: &sc.model,
+        ws: &mut ws,
+    };
+    reference
+        .integrate_to(&mut sys, &mut t, &mut y, 0.5)
+        .unwrap();
+
+    let mut sim = sc.simulation_with_step(0.01).unwrap();
+    let mut adaptive = Adaptive::new(AdaptiveSettings {
+        rtol: 1e-10,
+        atol: 1e-10,
+        ..AdaptiveSettings::default()
+    })
+    .unwrap();
+    let mut accepted = 0;
+    for k in 1..=50 {
+        let stats = sim.step_adaptive(&mut adaptive).unwrap();
+        accepted += stats.accepted;
+        assert_eq!(sim.time(), k as f64 * 0.01, "output time {k}");
+        assert_eq!(sim.steps(), k as u64);
+    }
+    let err = (sim.q()[0] - y[0]).abs().max((sim.q()[1] - y[1]).abs());
+    assert!(err < 1e-7, "{err:e}");
+    // More steps than output times: the controller, not the grid, sets the step.
+    assert!(accepted > 50, "{accepted} steps");
+    // The workspace is at the end state: crank 1's angle is q1 (its offset is 0).
+    assert_eq!(sim.workspace().body[1].theta, sim.q()[0]);
+
+    // A failing interval: an absurd tolerance makes the controller give up
+    // (StepTooSmall); the state is the last output's, and stepping on works.
+    let (q, qd, t) = (sim.q().to_vec(), sim.qd().to_vec(), sim.time());
+    let mut hopeless = Adaptive::new(AdaptiveSettings {
+        rtol: 1e-30,
+        atol: 1e-30,
+        h_min: 1e-9,
+        ..AdaptiveSettings::default()
+    })
+    .unwrap();
+    assert!(sim.step_adaptive(&mut hopeless).is_err());
+    assert_eq!((sim.q(), sim.qd(), sim.time()), (&q[..], &qd[..], t));
+    assert_eq!(sim.steps(), 50);
+    sim.step_adaptive(&mut adaptive).unwrap();
+    sim.step().unwrap();
+    assert_eq!(sim.steps(), 52);
+}

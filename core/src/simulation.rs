@@ -5,7 +5,7 @@
 use crate::config::{MAX_DOF, MAX_GROUPS, MAX_GROUP_VARS, STATE_DIM};
 use crate::dynamics::{energy, finish_accelerations, forward, generalized_accelerations, Energy};
 use crate::error::{ModelError, StepError};
-use crate::integrator::{Dp5, OdeSystem};
+use crate::integrator::{Adaptive, AdaptiveError, AdaptiveStats, Dp5, OdeSystem};
 use crate::kinematics::assemble;
 use crate::kinetostatics::reactions;
 use crate::model::Model;
@@ -138,13 +138,62 @@ impl<T: Real> Simulation<T> {
     /// by Sterbenz's lemma once `t > 0`, so `t + step` lands on `(n+1)h` and the FSAL
     /// stage stays valid.
     pub fn step(&mut self) -> Result<(), StepError> {
+        self.advance(
+            |sys, dp5, t, y, h| dp5.step(sys, t, y, h).map(|_| ()),
+            |e| e,
+        )
+    }
+
+    /// Advances to the next output time `(n+1)·h` with the adaptive DP5(4) `adaptive`
+    /// (error control by `rtol`/`atol`, as many steps of its own size as that needs, the
+    /// last one landing on `(n+1)·h` exactly): `h` is then the output interval, not the
+    /// integration step. The same guarantees as [`Simulation::step`]: on error the
+    /// state, the workspace and the step count are those of the last output time, and
+    /// `adaptive` forgets its FSAL stage. Returns the interval's step statistics.
+    ///
+    /// The simulation's own fixed-step integrator forgets its FSAL stage too: mixing
+    /// `step` and `step_adaptive` is allowed, each starts from the state.
+    pub fn step_adaptive(
+        &mut self,
+        adaptive: &mut Adaptive<T, STATE_DIM>,
+    ) -> Result<AdaptiveStats, AdaptiveError<StepError>> {
+        self.dp5.invalidate();
+        let r = self.advance(
+            |sys, _, t, y, h| {
+                let t_end = *t + h;
+                adaptive.integrate_to(sys, t, y, t_end)
+            },
+            AdaptiveError::System,
+        );
+        if r.is_err() {
+            adaptive.invalidate();
+        }
+        r
+    }
+
+    /// Takes the state from `t` to the next output time `(n+1)·h` by `integrate(system,
+    /// the fixed-step integrator, t, y, the interval)`, then checks the outputs there
+    /// (their errors wrapped by `wrap` into the integrator's error type `E`); on any
+    /// error restores the last good state (`t`, `y`, the groups' warm starts, the
+    /// workspace) and forgets the FSAL stage if the state had moved.
+    fn advance<R, E>(
+        &mut self,
+        integrate: impl FnOnce(
+            &mut Equations<'_, T>,
+            &mut Dp5<T, STATE_DIM>,
+            &mut T,
+            &mut SVector<T, STATE_DIM>,
+            T,
+        ) -> Result<R, E>,
+        wrap: fn(StepError) -> E,
+    ) -> Result<R, E> {
         let saved: [[T; MAX_GROUP_VARS]; MAX_GROUPS] = core::array::from_fn(|k| self.ws.group[k].x);
         let t_next = T::c((self.steps + 1) as f64) * self.h;
         if !t_next.finite() {
-            return Err(StepError::NonFinite {
+            return Err(wrap(StepError::NonFinite {
                 time: self.t.to_f64(),
                 what: "the time n·h of the next step",
-            });
+            }));
         }
         let h = t_next - self.t;
         let (t0, y0) = (self.t, self.y);
@@ -152,23 +201,21 @@ impl<T: Real> Simulation<T> {
             model: &self.model,
             ws: &mut self.ws,
         };
-        let mut accepted = false;
-        let result = self
-            .dp5
-            .step(&mut sys, &mut self.t, &mut self.y, h)
-            .and_then(|_| {
-                accepted = true;
+        let result =
+            integrate(&mut sys, &mut self.dp5, &mut self.t, &mut self.y, h).and_then(|r| {
                 // The last stage was evaluated at the new state (FSAL): finish it.
                 finish_accelerations(&self.model, &mut self.ws);
                 check_outputs(&self.model, &self.ws, t_next.to_f64())
+                    .map(|()| r)
+                    .map_err(wrap)
             });
         match result {
-            Ok(()) => {
+            Ok(r) => {
                 self.steps += 1;
-                Ok(())
+                Ok(r)
             }
             Err(e) => {
-                if accepted {
+                if self.t != t0 {
                     // The integrator had taken the step (its FSAL stage is the new
                     // state's): take it back.
                     self.t = t0;

@@ -475,7 +475,7 @@ fn draw_strip(f: &mut Figure, frames: &Frames, t: f64) {
         TextSize::Small,
         Anchor::End,
     ));
-    for k in 0..2 {
+    for (k, &c) in PALETTE.iter().take(2).enumerate() {
         let run: Vec<(f64, f64)> = frames
             .strip
             .iter()
@@ -486,7 +486,6 @@ fn draw_strip(f: &mut Figure, frames: &Frames, t: f64) {
             .into_iter()
             .map(|(x, y)| pt(sx(x), sy(y)))
             .collect();
-        let c = PALETTE[k];
         if pts.len() >= 2 {
             f.push(Shape::Polyline {
                 points: pts,

@@ -229,7 +229,10 @@ impl Outcome {
                 end: End::Stopped { expected: true, .. },
                 ..
             })) => "singularity",
-            Outcome::Converter(Ok(_)) | Outcome::Mechanism(Err(RunError::Step { .. })) => "failed",
+            Outcome::Converter(Ok(_))
+            | Outcome::Mechanism(Err(RunError::Step { .. } | RunError::Integrator { .. })) => {
+                "failed"
+            }
             Outcome::Mechanism(Err(_)) | Outcome::Converter(Err(_)) => "error",
         }
     }
@@ -311,7 +314,9 @@ pub fn write_table(w: &mut dyn Write, runs: &[BatchRun], outcomes: &[Outcome]) -
                 None,
                 None,
             ],
-            Outcome::Mechanism(Err(RunError::Step { steps, rows, .. })) => [
+            Outcome::Mechanism(Err(
+                RunError::Step { steps, rows, .. } | RunError::Integrator { steps, rows, .. },
+            )) => [
                 Some(steps.to_string()),
                 None,
                 Some(rows.to_string()),

@@ -148,8 +148,10 @@ Run files (TOML; the full reference with every key: host-sim/scenarios/README.md
     (length, mass, inertia), rocker_d, mass, mass_inertia, mass_at, shaft_inertia,
     drive = \"cw\"|\"ccw\", gravity, branch_c, branch_g, branch_i = \"left\"|\"right\",
     crank_deg, swing_deg, crank_speed, swing_speed
-  [run] h, t_end (s), every, f32, integrator = \"dp5\" (the fixed-step Dormand-Prince;
-    the only one the core's Simulation steps with); converter only: mode =
+  [run] h, t_end (s), every, f32, integrator = \"dp5\" (the fixed-step Dormand-Prince,
+    step h; the default) or \"adaptive\" (the adaptive DP5(4) between output times h
+    apart, with rtol, atol (default 1e-9 each) and h_max (default 10 h); mechanisms
+    only: the twin steps with a fixed h); converter only: mode =
     \"clutch\"|\"free\", motor, load (T_r, N·m)
   motor = a torque in N·m, or { type = \"constant\", torque }, { type = \"asynchronous\",
     breakdown_rpm, breakdown_torque, rated_rpm, rated_torque, synchronous_rpm },

@@ -3,9 +3,11 @@
 use crate::cli::{RunOptions, UsageError};
 use crate::columns::Layout;
 use crate::pictures::Recorder;
+use crate::runfile::Integrator;
 use std::fmt;
 use std::io::{self, Write};
 use std::time::{Duration, Instant};
+use structomat::integrator::{Adaptive, AdaptiveError, AdaptiveSettings};
 use structomat::structomat::GroupKind;
 use structomat::{Real, Simulation, StepError};
 
@@ -32,6 +34,17 @@ pub enum RunError {
         rows: u64,
         /// The core's error (it names the group, the time and the cause).
         error: StepError,
+    },
+    /// The adaptive integrator gave up between two output times (a step below its
+    /// smallest, too many steps or rejections); the rows before were written: exit
+    /// code 1.
+    Integrator {
+        /// Output intervals completed before the failure.
+        steps: u64,
+        /// CSV data rows written (including the one at t = 0).
+        rows: u64,
+        /// What the integrator reported.
+        error: String,
     },
     /// Writing the CSV failed: exit code 1.
     Write {
@@ -80,6 +93,11 @@ impl fmt::Display for RunError {
                     "kinetostatics after step {steps} failed ({rows} rows written): {error}"
                 )
             }
+            RunError::Integrator { steps, rows, error } => write!(
+                f,
+                "output interval {} failed ({rows} rows written): the adaptive integrator: {error}",
+                steps + 1
+            ),
             RunError::Write { target, error } => write!(f, "cannot write {target}: {error}"),
         }
     }
@@ -146,6 +164,9 @@ pub struct Summary {
     pub drive_work: f64,
     /// Largest reaction force magnitude over every step (revolute `|F|`, prismatic `|N|`).
     pub max_reaction: Option<MaxReaction>,
+    /// With `integrator = "adaptive"`: its steps accepted and rejected in all (`steps`
+    /// counts the output intervals then).
+    pub adaptive: Option<(u64, u64)>,
     /// Wall time of the whole run (stepping, kinetostatics, CSV).
     pub wall: Duration,
     /// Wall time inside `Simulation::step` only.
@@ -194,6 +215,13 @@ impl fmt::Display for Summary {
             "steps     {} of h = {} s, t = 0 .. {:.6} s, {} CSV rows",
             self.steps, self.h, self.time, self.rows
         )?;
+        if let Some((accepted, rejected)) = self.adaptive {
+            writeln!(
+                f,
+                "adaptive  DP5(4): {accepted} steps ({rejected} rejected) over the {} output intervals",
+                self.steps
+            )?;
+        }
         writeln!(
             f,
             "final     q = {}, qd = {}",
@@ -349,6 +377,20 @@ pub fn simulate_with<T: Real>(
     let mut sim = scenario
         .simulation_with_step(h)
         .map_err(|e| RunError::Setup(format!("cannot set up {}: {e}", opts.scenario.name())))?;
+    let mut adaptive = match opts.scenario.run_file().map(|f| f.run.integrator) {
+        Ok(Integrator::Adaptive { rtol, atol, h_max }) => Some(
+            Adaptive::new(AdaptiveSettings {
+                rtol: T::c(rtol),
+                atol: T::c(atol),
+                h0: h.min(T::c(h_max)),
+                h_max: T::c(h_max),
+                ..AdaptiveSettings::default()
+            })
+            .map_err(|e| RunError::Setup(format!("{}: {e}", opts.scenario.name())))?,
+        ),
+        _ => None,
+    };
+    let (mut accepted, mut rejected) = (0u64, 0u64);
     let model = sim.model().clone();
     let layout = Layout::new(&model);
     let forces: Vec<usize> = (0..layout.columns.len())
@@ -389,7 +431,7 @@ pub fn simulate_with<T: Real>(
     let outcome = loop {
         // Kinetostatics at the current state (the one at `steps`).
         if let Err(error) = sim.kinetostatics() {
-            break Err((true, error));
+            break Err(Failure::Kinetostatics(error));
         }
         for &k in &forces {
             let v = Layout::value(layout.columns[k], &sim).to_f64();
@@ -416,10 +458,21 @@ pub fn simulate_with<T: Real>(
             break Ok(());
         }
         let t0 = Instant::now();
-        let r = sim.step();
+        let r = match adaptive.as_mut() {
+            None => sim.step().map_err(Failure::Step),
+            Some(a) => match sim.step_adaptive(a) {
+                Ok(stats) => {
+                    accepted += u64::from(stats.accepted);
+                    rejected += u64::from(stats.rejected);
+                    Ok(())
+                }
+                Err(AdaptiveError::System(e)) => Err(Failure::Step(e)),
+                Err(e) => Err(Failure::Integrator(e.to_string())),
+            },
+        };
         step_wall += t0.elapsed();
-        if let Err(error) = r {
-            break Err((false, error));
+        if let Err(failure) = r {
+            break Err(failure);
         }
         steps += 1;
         let p = drive_power(&sim);
@@ -428,13 +481,25 @@ pub fn simulate_with<T: Real>(
     };
     let wall = start.elapsed();
     csv.flush().map_err(write_err)?;
-    if let Err((kinetostatics, error)) = outcome {
-        return Err(RunError::Step {
-            steps,
-            kinetostatics,
-            rows,
-            error,
-        });
+    match outcome {
+        Ok(()) => {}
+        Err(Failure::Step(error)) => {
+            return Err(RunError::Step {
+                steps,
+                kinetostatics: false,
+                rows,
+                error,
+            })
+        }
+        Err(Failure::Kinetostatics(error)) => {
+            return Err(RunError::Step {
+                steps,
+                kinetostatics: true,
+                rows,
+                error,
+            })
+        }
+        Err(Failure::Integrator(error)) => return Err(RunError::Integrator { steps, rows, error }),
     }
     let e1 = sim.energy();
     let mean_speed = (model.dof() > 0 && count > 0).then(|| MeanSpeed {
@@ -463,7 +528,18 @@ pub fn simulate_with<T: Real>(
             value,
             time,
         }),
+        adaptive: adaptive.map(|_| (accepted, rejected)),
         wall,
         step_wall,
     })
+}
+
+/// Why the stepping loop of [`simulate_with`] stopped early.
+enum Failure {
+    /// The next step (or output interval) failed.
+    Step(StepError),
+    /// The kinetostatics at the current state failed.
+    Kinetostatics(StepError),
+    /// The adaptive integrator gave up.
+    Integrator(String),
 }

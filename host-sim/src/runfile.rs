@@ -92,6 +92,26 @@ pub struct RunSettings {
     pub every: u64,
     /// Run the core in single precision.
     pub f32: bool,
+    /// How the mechanism is integrated between output times.
+    pub integrator: Integrator,
+}
+
+/// `[run] integrator`: how a mechanism file is integrated.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Integrator {
+    /// `"dp5"`: the fixed-step Dormand-Prince 5 of `Simulation::step`, step `h`.
+    Dp5,
+    /// `"adaptive"`: the adaptive DP5(4) of `Simulation::step_adaptive` (error control
+    /// by `rtol` and `atol`, steps of its own size up to `h_max`); `h` is then the
+    /// output interval.
+    Adaptive {
+        /// Relative tolerance (> 0).
+        rtol: f64,
+        /// Absolute tolerance, rad or m (> 0).
+        atol: f64,
+        /// Largest step, s (> 0).
+        h_max: f64,
+    },
 }
 
 /// A point of a body: body 0 is the ground (point = index of a `[[ground]]` point),
@@ -569,6 +589,7 @@ enum RawMode {
 #[serde(rename_all = "lowercase")]
 enum RawIntegrator {
     Dp5,
+    Adaptive,
 }
 
 #[derive(Deserialize)]
@@ -578,9 +599,10 @@ struct RawRun {
     t_end: f64,
     every: Option<u64>,
     f32: Option<bool>,
-    // Only "dp5" (the fixed-step Dormand-Prince the core's `Simulation` steps with).
-    #[allow(dead_code)]
     integrator: Option<RawIntegrator>,
+    rtol: Option<f64>,
+    atol: Option<f64>,
+    h_max: Option<f64>,
     mode: Option<RawMode>,
     motor: Option<toml::Value>,
     load: Option<f64>,
@@ -789,6 +811,26 @@ impl Check<'_> {
     }
 }
 
+/// `[run] integrator` and its tolerances: `rtol`, `atol`, `h_max` only with
+/// `"adaptive"` (defaults 1e-9, 1e-9 and 10·h).
+fn integrator(ck: &Check<'_>, r: &RawRun) -> Result<Integrator, FileError> {
+    let tolerances = [("rtol", r.rtol), ("atol", r.atol), ("h_max", r.h_max)];
+    match r.integrator.unwrap_or(RawIntegrator::Dp5) {
+        RawIntegrator::Dp5 => match tolerances.iter().find(|t| t.1.is_some()) {
+            Some((key, _)) => Err(ck.err(
+                format!("run.{key}"),
+                "only with integrator = \"adaptive\" (the fixed-step dp5 steps by h)",
+            )),
+            None => Ok(Integrator::Dp5),
+        },
+        RawIntegrator::Adaptive => Ok(Integrator::Adaptive {
+            rtol: ck.positive("run.rtol", r.rtol.unwrap_or(1e-9))?,
+            atol: ck.positive("run.atol", r.atol.unwrap_or(1e-9))?,
+            h_max: ck.positive("run.h_max", r.h_max.unwrap_or(10.0 * r.h))?,
+        }),
+    }
+}
+
 fn validate(raw: RawFile, origin: &str) -> Result<RunFile, FileError> {
     let ck = Check { origin };
     let r = &raw.run;
@@ -801,6 +843,7 @@ fn validate(raw: RawFile, origin: &str) -> Result<RunFile, FileError> {
             None => 1,
         },
         f32: r.f32.unwrap_or(false),
+        integrator: integrator(&ck, r)?,
     };
     let mechanism_keys = [
         ("gravity", raw.gravity.is_some()),
@@ -816,6 +859,12 @@ fn validate(raw: RawFile, origin: &str) -> Result<RunFile, FileError> {
                 return Err(ck.err(
                     *key,
                     "not in a converter file ([converter] describes the whole mechanism)",
+                ));
+            }
+            if run.integrator != Integrator::Dp5 {
+                return Err(ck.err(
+                    "run.integrator",
+                    "the converter's twin steps with a fixed h, as in firmware: only \"dp5\"",
                 ));
             }
             Body::Converter(Box::new(converter(&ck, c, &raw.run)?))

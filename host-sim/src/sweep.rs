@@ -214,7 +214,9 @@ impl From<&batch::Outcome> for Outcome {
                 put(Metric::Time, s.time);
                 Some(s.steps)
             }
-            batch::Outcome::Mechanism(Err(RunError::Step { steps, .. })) => Some(*steps),
+            batch::Outcome::Mechanism(Err(
+                RunError::Step { steps, .. } | RunError::Integrator { steps, .. },
+            )) => Some(*steps),
             batch::Outcome::Converter(Ok(s)) => {
                 let a = &s.audit;
                 put(Metric::Time, s.time);
