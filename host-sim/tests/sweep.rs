@@ -285,20 +285,27 @@ fn keep_runs_writes_each_variant_like_batch() {
     );
 }
 
-// The example sweep shipped with host-sim stays valid and small enough to run in
-// seconds.
+// The example sweeps shipped with host-sim stay valid (every variant a valid run file)
+// and small enough to run in seconds.
 #[test]
-fn example_sweep_parses() {
-    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/sweeps/mass-motor.toml");
-    let text = std::fs::read_to_string(path).unwrap();
-    let s = host_sim::sweep::parse_sweep(&text, path, |b| {
-        let id = ScenarioId::from_name(b).ok_or("not a built-in")?;
-        match host_sim::runfile::parse_value(id.file_text(), b).map_err(|e| e.to_string())? {
-            toml::Value::Table(t) => Ok((t, b.to_string())),
-            _ => Err("not a table".into()),
+fn example_sweeps_parse() {
+    for (name, variants) in [("mass-motor", 30), ("geometry", 20)] {
+        let path = format!("{}/sweeps/{name}.toml", env!("CARGO_MANIFEST_DIR"));
+        let text = std::fs::read_to_string(&path).unwrap();
+        let s = host_sim::sweep::parse_sweep(&text, &path, |b| {
+            let id = ScenarioId::from_name(b).ok_or("not a built-in")?;
+            match host_sim::runfile::parse_value(id.file_text(), b).map_err(|e| e.to_string())? {
+                toml::Value::Table(t) => Ok((t, b.to_string())),
+                _ => Err("not a table".into()),
+            }
+        })
+        .unwrap();
+        let v = s.variants().unwrap();
+        assert_eq!(v.len(), variants, "{name}");
+        assert_eq!(s.heatmaps.len(), 2, "{name}");
+        for (k, (_, tree)) in v.into_iter().enumerate() {
+            host_sim::run_file_from_value(toml::Value::Table(tree), name)
+                .unwrap_or_else(|e| panic!("{name} variant {k}: {e}"));
         }
-    })
-    .unwrap();
-    assert_eq!(s.variants().unwrap().len(), 30);
-    assert_eq!(s.heatmaps.len(), 2);
+    }
 }
