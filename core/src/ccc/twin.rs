@@ -320,6 +320,11 @@ impl<T: Real> Audit<T> {
 /// > 0 over a step.
 type Guards<T> = [Option<T>; 6];
 
+/// The event functions that are speeds (catches, shaft stop), as bits of [`fired`]:
+/// the kinematics up to the velocities evaluate them, with no equations of motion and
+/// no kinetostatics.
+const SPEED_GUARDS: u8 = 0b10_0011;
+
 /// The twin of one converter.
 #[derive(Clone, Debug)]
 pub struct Twin<T: Real> {
@@ -788,6 +793,8 @@ impl<T: Real> Twin<T> {
             }
             best
         };
+        // The caller evaluates the state at the event in full after this.
+        let speeds_only = fired & !SPEED_GUARDS == 0;
         let (mut lo, mut hi) = (T::zero(), T::one());
         let (mut glo, _) = pick(g0);
         let (mut ghi, mut which) = pick(&self.guards);
@@ -805,7 +812,17 @@ impl<T: Real> Twin<T> {
             self.dp5.dense(th, &mut y);
             w.t = t0 + th * h;
             w.y = y;
-            self.finish(w, inputs)?;
+            if speeds_only {
+                self.slot
+                    .eval_speeds(w.t, &w.y)
+                    .map_err(|e| self.physical_error(e))?;
+                let links = self.slot.links(&self.params);
+                // The clutch torques are those of the last full evaluation: the
+                // torque functions are not read (none of them fired).
+                self.guards = self.guards_of(&self.slot, &links, &self.c, inputs);
+            } else {
+                self.finish(w, inputs)?;
+            }
             let (g, k) = pick(&self.guards);
             if g > T::zero() {
                 hi = th;
