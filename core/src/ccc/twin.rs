@@ -30,7 +30,8 @@ pub const MAX_EVENTS_PER_STEP: usize = 4;
 pub const MAX_LOCATE_ITER: usize = 16;
 /// Coordinate switches after a failed sub-step at most.
 pub const MAX_RETRIES: usize = 2;
-/// An event is located to this fraction of the step (1e-12 s at h = 1e-4 s).
+/// An event is located to this fraction of the step (1e-12 s at h = 1e-4 s; f32: 8 ulps,
+/// see `Twin::locate`).
 const THETA_TOL: f64 = 1e-8;
 /// Sub-steps tried in turn when a step breaks the energy balance (see
 /// [`TwinSettings::energy_tol`]): at most 1 + 4 + 16 DP5 steps' work.
@@ -800,15 +801,26 @@ impl<T: Real> Twin<T> {
         let (mut ghi, mut which) = pick(&self.guards);
         let mut side = 0i8;
         let mut y = SVector::<T, STATE>::zeros();
+        // THETA_TOL, or 8 ulps of the step's fraction if that is larger (f32: 9.5e-7),
+        // so that the margin below moves the point by a few ulps at least.
+        let tol = T::c(THETA_TOL).max(T::EPS * T::c(8.0));
         for _ in 0..MAX_LOCATE_ITER {
-            if hi - lo <= T::c(THETA_TOL) {
+            if hi - lo <= tol {
                 break;
             }
-            let mut th = (lo * ghi - hi * glo) / (ghi - glo);
-            let margin = (hi - lo) * T::c(0.01);
-            if !(th > lo + margin && th < hi - margin) {
-                th = (lo + hi) * T::c(0.5);
-            }
+            // Regula falsi's point, kept at least 0.4 of the tolerance inside the
+            // bracket: once the crossing is that close to an end, the next point lands
+            // past it and closes the bracket. (Bisecting whenever the point fell within
+            // 1% of the bracket of an end, as before, turned the iteration into
+            // bisection near convergence: every event of S2 took the 16 evaluations and
+            // was located to about 1e-5 of the step, not to the tolerance.)
+            let th = (lo * ghi - hi * glo) / (ghi - glo);
+            let margin = tol * T::c(0.4);
+            let th = if th.finite() {
+                th.max(lo + margin).min(hi - margin)
+            } else {
+                (lo + hi) * T::c(0.5)
+            };
             self.dp5.dense(th, &mut y);
             w.t = t0 + th * h;
             w.y = y;
