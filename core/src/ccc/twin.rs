@@ -720,10 +720,16 @@ impl<T: Real> Twin<T> {
         finish_accelerations(&self.slot.model, &mut self.slot.ws);
         reactions(&self.slot.model, &mut self.slot.ws, w.t.to_f64())
             .map_err(|e| self.physical_error(e))?;
+        self.read_evaluation(inputs);
+        Ok(())
+    }
+
+    /// The clutch torques and the event functions from the slot's workspace, which
+    /// holds a full evaluation (accelerations and kinetostatics).
+    fn read_evaluation(&mut self, inputs: &Inputs<T>) {
         let links = self.slot.links(&self.params);
         self.c = self.slot.clutch_torques(&self.params, &links);
         self.guards = self.guards_of(&self.slot, &links, &self.c, inputs);
-        Ok(())
     }
 
     /// The event functions of `slot`'s mode at its evaluated state.
@@ -1018,7 +1024,14 @@ impl<T: Real> Twin<T> {
         w.y = self.cand_state(w);
         w.impact += loss;
         self.dp5.invalidate();
-        self.finish(w, inputs)?;
+        if consistent {
+            // `try_candidate` evaluated the chosen mode in full (kinetostatics
+            // included) at this very state, `w.y` being read back from it: evaluating
+            // again would give the same bits.
+            self.read_evaluation(inputs);
+        } else {
+            self.finish(w, inputs)?;
+        }
         let after = self.slot.links(&self.params);
         let position_gap = joint_gap(&self.params, &links, &after);
         log::info!(
