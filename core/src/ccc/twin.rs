@@ -626,7 +626,6 @@ impl<T: Real> Twin<T> {
                         return Err(self.physical_error(e));
                     }
                     retries += 1;
-                    self.backup_once(w);
                     self.finish(w, inputs)?;
                     self.switch_coordinates(w, inputs, Some(e))?;
                     continue;
@@ -649,7 +648,6 @@ impl<T: Real> Twin<T> {
             self.choose(w, kind, inputs)?;
         }
         if self.slot.mode != Mode::Jam && self.slot.conditioning() < self.settings.switch_below {
-            self.backup_once(w);
             self.switch_coordinates(w, inputs, None)?;
         }
         if !same_bits(w.t, t_end) {
@@ -1224,6 +1222,10 @@ impl<T: Real> Twin<T> {
             .rebuild(&self.params, mode, coords, &pose, time)
             .map_err(TwinError::Step)?;
         let from = self.slot.coords;
+        // Kept only now that the slot changes: most scans (every step while the
+        // conditioning is under `switch_below` and no choice is 1.5 times better) keep
+        // it, and the copy is a whole slot.
+        self.backup_once(w);
         core::mem::swap(&mut self.slot, &mut self.cand);
         let omega: [T; 9] = core::array::from_fn(|p| links[p].omega);
         load_state(&self.slot, &q, &omega, &mut w.y);
