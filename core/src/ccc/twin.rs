@@ -1176,10 +1176,16 @@ impl<T: Real> Twin<T> {
         let pose = self.slot_links_unwrapped();
         let links = self.slot.links(&self.params);
         let now = self.slot.conditioning();
-        let mut best: Option<(T, Coordinates)> = None;
-        let skip = failed.map(|_| self.slot.coords);
+        // (conditioning, choice, its coordinates) of the best other choice.
+        let mut best: Option<(T, Coordinates, [T; 2])> = None;
+        let mut last_assembled = None;
+        // The current choice is not assembled again: it is at this very pose with
+        // conditioning `now`, so it could only win the scan by keeping its place, and
+        // another choice is taken only if it beats `now` by 1.5.
+        let skip = Some(self.slot.coords);
         // The choices are assembled in the scratch slot and only the winner's choice is
-        // kept (built again below): no slot is ever a temporary on the stack.
+        // kept (assembled again below unless the slot still holds it): no slot is ever
+        // a temporary on the stack.
         let mut failures = scan_choices(
             &self.params,
             mode,
@@ -1187,15 +1193,20 @@ impl<T: Real> Twin<T> {
             time,
             skip,
             &mut self.cand,
-            |coords, s, _| {
+            |coords, s, q| {
                 let cond = s.conditioning();
-                if best.as_ref().is_none_or(|(b, _)| cond > *b) {
-                    best = Some((cond, coords));
+                if best.as_ref().is_none_or(|(b, _, _)| cond > *b) {
+                    best = Some((cond, coords, q));
                 }
+                last_assembled = Some(coords);
                 false
             },
         )?;
-        let Some((cond, coords)) = best else {
+        if failed.is_none() && best.is_none() {
+            // No other choice assembles here: the current one still drives.
+            return Ok(());
+        }
+        let Some((cond, coords, q)) = best else {
             if let Some(StepError::Group { group, fault, .. }) =
                 failed.map(|e| physical(&self.slot.map, e))
             {
@@ -1214,13 +1225,20 @@ impl<T: Real> Twin<T> {
                 failures,
             });
         };
-        if coords == self.slot.coords || !(failed.is_some() || cond > now * T::c(1.5)) {
+        if !(failed.is_some() || cond > now * T::c(1.5)) {
             return Ok(());
         }
-        let q = self
-            .cand
-            .rebuild(&self.params, mode, coords, &pose, time)
-            .map_err(TwinError::Step)?;
+        // The scratch slot holds the winner if it was the last choice tried (the scan
+        // tries them in order; a failed one after it leaves the slot half-built).
+        let order = |c: Coordinates| mode.coordinate_choices().iter().position(|x| *x == c);
+        let holds_winner = last_assembled == Some(coords)
+            && failures.iter().all(|f| order(f.coords) < order(coords));
+        if !holds_winner {
+            // The same pose: the same bits as in the scan.
+            self.cand
+                .rebuild(&self.params, mode, coords, &pose, time)
+                .map_err(TwinError::Step)?;
+        }
         let from = self.slot.coords;
         // Kept only now that the slot changes: most scans (every step while the
         // conditioning is under `switch_below` and no choice is 1.5 times better) keep
