@@ -11,6 +11,17 @@
 //! step (set-up cancels out). Workloads: `twin-f64`, `twin-f32` (S2: 12 N·m, T_r =
 //! 800 N·m, h = 1e-4 s, the first 10 000 steps are its first second, events included),
 //! `five-bar-f64`, `five-bar-f32` (the thesis's five-bar at h = 1e-3 s).
+//!
+//! One step's count: `twin-f64-at K [N]` runs S2's steps before `K` untimed and steps
+//! `K..K+N` (default 1) inside `measured`, which callgrind alone can count:
+//!
+//! ```sh
+//! valgrind --tool=callgrind --collect-atstart=no --toggle-collect='*measured*' \
+//!     target/release/examples/steps twin-f64-at 667
+//! ```
+//!
+//! `twin-f64-log` lists S2's steps (first second) that hold an event, a coordinate
+//! switch or a mode change: the indices to give `twin-f64-at`.
 
 use std::hint::black_box;
 use std::process::ExitCode;
@@ -31,7 +42,64 @@ fn twin<T: Real>(steps: u32) -> Result<T, String> {
     for _ in 0..steps {
         twin.step(black_box(&inputs)).map_err(|e| e.to_string())?;
     }
-    Ok(twin.q()[0])
+    Ok(twin.q().first().copied().unwrap_or_default())
+}
+
+/// The steps counted by `twin-f64-at` (callgrind's `--toggle-collect='*measured*'`).
+#[inline(never)]
+fn measured(twin: &mut Twin<f64>, inputs: &Inputs<f64>, n: u32) -> Result<(), String> {
+    for _ in 0..n {
+        twin.step(black_box(inputs)).map_err(|e| e.to_string())?;
+    }
+    Ok(())
+}
+
+/// S2 in f64 up to step `at`, then `n` steps in [`measured`]; `log`: print each step
+/// with an event, a switch or a mode change.
+fn twin_at(at: u32, n: u32, log: bool) -> Result<f64, String> {
+    let inputs = Inputs {
+        motor: MotorInput::Law(Motor::Constant(12.0)),
+        load: 800.0,
+        measured: None,
+    };
+    let mut twin = Box::new(
+        Twin::new(
+            CccParams::reference(),
+            TwinSettings::reference(1e-4),
+            inputs,
+        )
+        .map_err(|e| e.to_string())?,
+    );
+    for k in 0..at {
+        let before = (twin.mode(), twin.coordinates());
+        twin.step(black_box(&inputs)).map_err(|e| e.to_string())?;
+        if log
+            && (!twin.events().is_empty() || !twin.switches().is_empty() || before.0 != twin.mode())
+        {
+            let ev: Vec<String> = twin
+                .events()
+                .iter()
+                .map(|e| format!("{} {}->{}", e.kind.name(), e.from, e.to))
+                .collect();
+            let sw: Vec<String> = twin
+                .switches()
+                .iter()
+                .map(|s| format!("switch {} {}->{}", s.mode, s.from, s.to))
+                .collect();
+            println!(
+                "step {k} t={:.4} {}/{} -> {}/{}: {} {}",
+                twin.time(),
+                before.0,
+                before.1,
+                twin.mode(),
+                twin.coordinates(),
+                ev.join(", "),
+                sw.join(", ")
+            );
+        }
+    }
+    measured(&mut twin, &inputs, n)?;
+    Ok(twin.q().first().copied().unwrap_or_default())
 }
 
 fn five<T: Real>(steps: u32) -> Result<T, String> {
@@ -47,12 +115,15 @@ fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let (Some(work), Some(Ok(steps))) = (args.first(), args.get(1).map(|n| n.parse::<u32>()))
     else {
-        eprintln!("usage: steps twin-f64|twin-f32|five-bar-f64|five-bar-f32 STEPS");
+        eprintln!("usage: steps twin-f64|twin-f32|five-bar-f64|five-bar-f32|twin-f64-at|twin-f64-log STEPS [N]");
         return ExitCode::from(2);
     };
+    let n = args.get(2).and_then(|n| n.parse::<u32>().ok()).unwrap_or(1);
     let result = match work.as_str() {
         "twin-f64" => twin::<f64>(steps),
         "twin-f32" => twin::<f32>(steps).map(f64::from),
+        "twin-f64-at" => twin_at(steps, n, false),
+        "twin-f64-log" => twin_at(steps, 0, true),
         "five-bar-f64" => five::<f64>(steps),
         "five-bar-f32" => five::<f32>(steps).map(f64::from),
         other => Err(format!("unknown workload {other}")),

@@ -180,27 +180,36 @@ pub fn assemble<T: Real>(
         gd.x = g.guess;
         match g.kind {
             GroupKind::Rrr | GroupKind::Rrt | GroupKind::Rtr => {
-                let mut best: Option<(T, GroupData<T>)> = None;
+                // (distance, trial, whether it is the last trial that placed the links)
+                let mut best: Option<(T, GroupData<T>, bool)> = None;
                 let mut last_err = GroupFault::NonFiniteInput;
                 for branch in [T::one(), -T::one()] {
                     let mut trial = *gd;
                     trial.branch = branch;
+                    // This trial may move the links (even if it fails).
+                    if let Some((_, _, placed)) = best.as_mut() {
+                        *placed = false;
+                    }
                     match solve_group(g, &mut trial, model, body, q) {
                         Ok(_) => {
                             let d = distance_to_guess(g, &trial.x);
-                            if best.as_ref().is_none_or(|(bd, _)| d < *bd) {
-                                best = Some((d, trial));
+                            if best.as_ref().is_none_or(|(bd, _, _)| d < *bd) {
+                                best = Some((d, trial, true));
                             }
                         }
                         Err(e) => last_err = e,
                     }
                 }
-                let Some((_, chosen)) = best else {
+                let Some((_, chosen, placed)) = best else {
                     return Err(fail(g, i, 0.0, last_err));
                 };
                 *gd = chosen;
-                // Re-place with the chosen branch (the losing trial placed last).
-                solve_group(g, gd, model, body, q).map_err(|f| fail(g, i, 0.0, f))?;
+                // Re-place with the chosen branch if a losing trial placed the links
+                // after it (a closed form's solve is a function of its inputs: placing
+                // again would give the same bits).
+                if !placed {
+                    solve_group(g, gd, model, body, q).map_err(|f| fail(g, i, 0.0, f))?;
+                }
             }
             _ => {
                 let det = solve_group(g, gd, model, body, q).map_err(|f| fail(g, i, 0.0, f))?;

@@ -69,6 +69,27 @@ pub fn evaluate<T: Real>(
     qd: &[T],
     time: f64,
 ) -> Result<(), StepError> {
+    evaluate_velocities(model, ws, q, qd, time)?;
+    let zero = [T::zero(); MAX_DOF];
+    acceleration(model, ws, qd, &zero);
+    cog_accelerations(model, &ws.body, &mut ws.a_bias);
+    for gd in ws.group.iter_mut().take(model.groups().len()) {
+        gd.xdd_bias = gd.xdd;
+    }
+    Ok(())
+}
+
+/// The first half of [`evaluate`]: positions, `V`, `C` and the actual velocities of the
+/// bodies and groups, without the acceleration pass (the bodies' and groups'
+/// accelerations are left as they were). For what needs speeds only, e.g. locating an
+/// event whose function is a speed.
+pub fn evaluate_velocities<T: Real>(
+    model: &Model<T>,
+    ws: &mut Workspace<T>,
+    q: &[T],
+    qd: &[T],
+    time: f64,
+) -> Result<(), StepError> {
     if qd.iter().any(|v| !v.finite()) {
         return Err(StepError::NonFinite {
             time,
@@ -108,12 +129,6 @@ pub fn evaluate<T: Real>(
         for (dst, v) in gd.xd.iter_mut().zip(xd.iter()) {
             *dst = *v;
         }
-    }
-    let zero = [T::zero(); MAX_DOF];
-    acceleration(model, ws, qd, &zero);
-    cog_accelerations(model, &ws.body, &mut ws.a_bias);
-    for gd in ws.group.iter_mut().take(model.groups().len()) {
-        gd.xdd_bias = gd.xdd;
     }
     Ok(())
 }

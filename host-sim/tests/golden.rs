@@ -88,19 +88,19 @@ const PINS: &[Pin<'static>] = &[
     Pin {
         args: "ccc-s2",
         exit: 0,
-        csv: "2f0077086acccb733a68533c27772aa390c546ade3943bd9bb508f6e46a6cba5",
+        csv: "51663f8bc00ee7c174303348fb1b6985bc82f3eb605990dd7e3357dc91adcc51",
         logs: Some((
-            "b2ab9dc6a326b67d194dc78ca647dcc778d60b4ad24d7692d61945d9d9635db5",
-            "9cdf20d82e0973d20a77cb3b60a7a0306ed83e9dc6844915639a816164f143e3",
+            "d8d2b53c47ddbfeb6a4d6bf25d71d81309040b0c9f462e13abd4b06a6e718186",
+            "c6082f21edea362f1a163d280cf43469b4dd60a6a58db2821309fd42a1fc19e5",
         )),
     },
     Pin {
         args: "ccc-s2 --ccw",
         exit: 0,
-        csv: "33affb3257456e959ba46ce56b5a30769d6013a0c3088f5dd1b1eef003883f40",
+        csv: "cfcf153a5742713cadfd608bcf5a1906bf87dc4ab25d24a950ffd67f02848b75",
         logs: Some((
-            "cacf5a6a5b7fe0cc24c5a17e0e93e30af60c4473f678095de25cf1ec740b4d04",
-            "f407ef89db37eb78a775490682765fdf1aea3414d1857eaa220d8bcde612a724",
+            "f689cf3fb2838e023d5293ff329851a8206b6c99471d635e90d7c94fc34e8454",
+            "ab8d17dcad307883ac52506ee9697d1f57a19c7185c99e0923181c325b5ad043",
         )),
     },
     Pin {
@@ -121,10 +121,10 @@ const PINS: &[Pin<'static>] = &[
     Pin {
         args: "ccc-s2 --f32",
         exit: 0,
-        csv: "5f8771bc3d1896872dbd9f8becfb786adfdb622b60a4b2ccb110d8109a355994",
+        csv: "8632289b5c5c3875eed81cae7e0b179aedfe68a9e8ebc26da25836a1d65caa0e",
         logs: Some((
-            "97da2847a078a243936a635b7f9b4b70126fb2730cba62e26ceb2f25a597f320",
-            "74ffff48e19368d66a6b76e1e32bb4dfe592c82b253c947516d901ba7bc4ba25",
+            "bd61bc4bcc45dfcc095135237820e0205ef4a8a6bb4e68f577c01a51e2fb37ff",
+            "93b41199f12f5980653a67462f012939d6fa9239f49f079974a58fa9da92f032",
         )),
     },
 ];

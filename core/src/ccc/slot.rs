@@ -15,7 +15,7 @@ use crate::motor::Motor;
 use crate::scalar::{cross, perp, rotate_cs, Real, Vec2};
 use crate::structomat::GroupKind;
 use crate::structomat::JointKind;
-use crate::transmission::evaluate;
+use crate::transmission::{evaluate, evaluate_velocities};
 use crate::workspace::Workspace;
 use nalgebra::SVector;
 
@@ -212,6 +212,16 @@ impl<T: Real> Slot<T> {
             }
         }
         solve_accelerations(&self.model, &mut self.ws, t)
+    }
+
+    /// The kinematics at `y` up to the velocities only (see [`evaluate_velocities`]):
+    /// the links' positions and speeds, not their accelerations.
+    pub fn eval_speeds(&mut self, t: T, y: &SVector<T, STATE>) -> Result<(), StepError> {
+        let n = self.map.dof.min(2);
+        let s = y.as_slice();
+        let q = s.get(..n).unwrap_or(&[]);
+        let qd = s.get(QD..QD + n).unwrap_or(&[]);
+        evaluate_velocities(&self.model, &mut self.ws, q, qd, t.to_f64())
     }
 
     /// `dy` of the state after [`Slot::eval`]: `q̇`, `q̈`, motor power, load power.

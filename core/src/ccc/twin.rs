@@ -30,7 +30,8 @@ pub const MAX_EVENTS_PER_STEP: usize = 4;
 pub const MAX_LOCATE_ITER: usize = 16;
 /// Coordinate switches after a failed sub-step at most.
 pub const MAX_RETRIES: usize = 2;
-/// An event is located to this fraction of the step (1e-12 s at h = 1e-4 s).
+/// An event is located to this fraction of the step (1e-12 s at h = 1e-4 s; f32: 8 ulps,
+/// see `Twin::locate`).
 const THETA_TOL: f64 = 1e-8;
 /// Sub-steps tried in turn when a step breaks the energy balance (see
 /// [`TwinSettings::energy_tol`]): at most 1 + 4 + 16 DP5 steps' work.
@@ -319,6 +320,11 @@ impl<T: Real> Audit<T> {
 /// release8, breakaway, shaft stop]`; an event fires when its function goes from ≤ 0 to
 /// > 0 over a step.
 type Guards<T> = [Option<T>; 6];
+
+/// The event functions that are speeds (catches, shaft stop), as bits of [`fired`]:
+/// the kinematics up to the velocities evaluate them, with no equations of motion and
+/// no kinetostatics.
+const SPEED_GUARDS: u8 = 0b10_0011;
 
 /// The twin of one converter.
 #[derive(Clone, Debug)]
@@ -620,7 +626,6 @@ impl<T: Real> Twin<T> {
                         return Err(self.physical_error(e));
                     }
                     retries += 1;
-                    self.backup_once(w);
                     self.finish(w, inputs)?;
                     self.switch_coordinates(w, inputs, Some(e))?;
                     continue;
@@ -643,7 +648,6 @@ impl<T: Real> Twin<T> {
             self.choose(w, kind, inputs)?;
         }
         if self.slot.mode != Mode::Jam && self.slot.conditioning() < self.settings.switch_below {
-            self.backup_once(w);
             self.switch_coordinates(w, inputs, None)?;
         }
         if !same_bits(w.t, t_end) {
@@ -714,10 +718,19 @@ impl<T: Real> Twin<T> {
         finish_accelerations(&self.slot.model, &mut self.slot.ws);
         reactions(&self.slot.model, &mut self.slot.ws, w.t.to_f64())
             .map_err(|e| self.physical_error(e))?;
+        self.read_evaluation(inputs);
+        Ok(())
+    }
+
+    /// The clutch torques and the event functions from the slot's workspace, which
+    /// holds a full evaluation (accelerations and kinetostatics). Not inlined: inlined
+    /// into the mode choice it added 3.7 KB to the f64 step's stack high-water
+    /// (`tests/footprint.rs`: 19.1 KB instead of 15.5 KB).
+    #[inline(never)]
+    fn read_evaluation(&mut self, inputs: &Inputs<T>) {
         let links = self.slot.links(&self.params);
         self.c = self.slot.clutch_torques(&self.params, &links);
         self.guards = self.guards_of(&self.slot, &links, &self.c, inputs);
-        Ok(())
     }
 
     /// The event functions of `slot`'s mode at its evaluated state.
@@ -788,24 +801,47 @@ impl<T: Real> Twin<T> {
             }
             best
         };
+        // The caller evaluates the state at the event in full after this.
+        let speeds_only = fired & !SPEED_GUARDS == 0;
         let (mut lo, mut hi) = (T::zero(), T::one());
         let (mut glo, _) = pick(g0);
         let (mut ghi, mut which) = pick(&self.guards);
         let mut side = 0i8;
         let mut y = SVector::<T, STATE>::zeros();
+        // THETA_TOL, or 8 ulps of the step's fraction if that is larger (f32: 9.5e-7),
+        // so that the margin below moves the point by a few ulps at least.
+        let tol = T::c(THETA_TOL).max(T::EPS * T::c(8.0));
         for _ in 0..MAX_LOCATE_ITER {
-            if hi - lo <= T::c(THETA_TOL) {
+            if hi - lo <= tol {
                 break;
             }
-            let mut th = (lo * ghi - hi * glo) / (ghi - glo);
-            let margin = (hi - lo) * T::c(0.01);
-            if !(th > lo + margin && th < hi - margin) {
-                th = (lo + hi) * T::c(0.5);
-            }
+            // Regula falsi's point, kept at least 0.4 of the tolerance inside the
+            // bracket: once the crossing is that close to an end, the next point lands
+            // past it and closes the bracket. (Bisecting whenever the point fell within
+            // 1% of the bracket of an end, as before, turned the iteration into
+            // bisection near convergence: every event of S2 took the 16 evaluations and
+            // was located to about 1e-5 of the step, not to the tolerance.)
+            let th = (lo * ghi - hi * glo) / (ghi - glo);
+            let margin = tol * T::c(0.4);
+            let th = if th.finite() {
+                th.max(lo + margin).min(hi - margin)
+            } else {
+                (lo + hi) * T::c(0.5)
+            };
             self.dp5.dense(th, &mut y);
             w.t = t0 + th * h;
             w.y = y;
-            self.finish(w, inputs)?;
+            if speeds_only {
+                self.slot
+                    .eval_speeds(w.t, &w.y)
+                    .map_err(|e| self.physical_error(e))?;
+                let links = self.slot.links(&self.params);
+                // The clutch torques are those of the last full evaluation: the
+                // torque functions are not read (none of them fired).
+                self.guards = self.guards_of(&self.slot, &links, &self.c, inputs);
+            } else {
+                self.finish(w, inputs)?;
+            }
             let (g, k) = pick(&self.guards);
             if g > T::zero() {
                 hi = th;
@@ -989,7 +1025,14 @@ impl<T: Real> Twin<T> {
         w.y = self.cand_state(w);
         w.impact += loss;
         self.dp5.invalidate();
-        self.finish(w, inputs)?;
+        if consistent {
+            // `try_candidate` evaluated the chosen mode in full (kinetostatics
+            // included) at this very state, `w.y` being read back from it: evaluating
+            // again would give the same bits.
+            self.read_evaluation(inputs);
+        } else {
+            self.finish(w, inputs)?;
+        }
         let after = self.slot.links(&self.params);
         let position_gap = joint_gap(&self.params, &links, &after);
         log::info!(
@@ -1136,10 +1179,16 @@ impl<T: Real> Twin<T> {
         let pose = self.slot_links_unwrapped();
         let links = self.slot.links(&self.params);
         let now = self.slot.conditioning();
-        let mut best: Option<(T, Coordinates)> = None;
-        let skip = failed.map(|_| self.slot.coords);
+        // (conditioning, choice, its coordinates) of the best other choice.
+        let mut best: Option<(T, Coordinates, [T; 2])> = None;
+        let mut last_assembled = None;
+        // The current choice is not assembled again: it is at this very pose with
+        // conditioning `now`, so it could only win the scan by keeping its place, and
+        // another choice is taken only if it beats `now` by 1.5.
+        let skip = Some(self.slot.coords);
         // The choices are assembled in the scratch slot and only the winner's choice is
-        // kept (built again below): no slot is ever a temporary on the stack.
+        // kept (assembled again below unless the slot still holds it): no slot is ever
+        // a temporary on the stack.
         let mut failures = scan_choices(
             &self.params,
             mode,
@@ -1147,15 +1196,20 @@ impl<T: Real> Twin<T> {
             time,
             skip,
             &mut self.cand,
-            |coords, s, _| {
+            |coords, s, q| {
                 let cond = s.conditioning();
-                if best.as_ref().is_none_or(|(b, _)| cond > *b) {
-                    best = Some((cond, coords));
+                if best.as_ref().is_none_or(|(b, _, _)| cond > *b) {
+                    best = Some((cond, coords, q));
                 }
+                last_assembled = Some(coords);
                 false
             },
         )?;
-        let Some((cond, coords)) = best else {
+        if failed.is_none() && best.is_none() {
+            // No other choice assembles here: the current one still drives.
+            return Ok(());
+        }
+        let Some((cond, coords, q)) = best else {
             if let Some(StepError::Group { group, fault, .. }) =
                 failed.map(|e| physical(&self.slot.map, e))
             {
@@ -1174,14 +1228,25 @@ impl<T: Real> Twin<T> {
                 failures,
             });
         };
-        if coords == self.slot.coords || !(failed.is_some() || cond > now * T::c(1.5)) {
+        if !(failed.is_some() || cond > now * T::c(1.5)) {
             return Ok(());
         }
-        let q = self
-            .cand
-            .rebuild(&self.params, mode, coords, &pose, time)
-            .map_err(TwinError::Step)?;
+        // The scratch slot holds the winner if it was the last choice tried (the scan
+        // tries them in order; a failed one after it leaves the slot half-built).
+        let order = |c: Coordinates| mode.coordinate_choices().iter().position(|x| *x == c);
+        let holds_winner = last_assembled == Some(coords)
+            && failures.iter().all(|f| order(f.coords) < order(coords));
+        if !holds_winner {
+            // The same pose: the same bits as in the scan.
+            self.cand
+                .rebuild(&self.params, mode, coords, &pose, time)
+                .map_err(TwinError::Step)?;
+        }
         let from = self.slot.coords;
+        // Kept only now that the slot changes: most scans (every step while the
+        // conditioning is under `switch_below` and no choice is 1.5 times better) keep
+        // it, and the copy is a whole slot.
+        self.backup_once(w);
         core::mem::swap(&mut self.slot, &mut self.cand);
         let omega: [T; 9] = core::array::from_fn(|p| links[p].omega);
         load_state(&self.slot, &q, &omega, &mut w.y);

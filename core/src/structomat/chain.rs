@@ -450,6 +450,18 @@ pub(crate) fn position_from_x<T: Real>(
     q: &[T],
 ) -> Result<T, GroupFault> {
     eval_terms(g, gd, bodies, q);
+    position_from_terms(g, gd, model, bodies, q)
+}
+
+/// [`position_from_x`] when the terms are already cached at `gd.x` (Newton-Raphson's
+/// converged iterate: its residual check evaluated them there).
+pub(crate) fn position_from_terms<T: Real>(
+    g: &Group<T>,
+    gd: &mut GroupData<T>,
+    model: &Model<T>,
+    bodies: &mut [BodyState<T>],
+    q: &[T],
+) -> Result<T, GroupFault> {
     let det = factor(g, gd, model.singular_tol())?;
     place(g, gd, model, bodies, q);
     Ok(det)

@@ -6,7 +6,7 @@
 //! `gd.x`, the previous configuration, which keeps the assembly branch as long as the
 //! motion does not cross a singular position (checked by the sign of det W).
 
-use super::chain::{eval_terms, jacobian, position_from_x, residual};
+use super::chain::{eval_terms, jacobian, position_from_terms, residual};
 use super::{Base, Group, GroupData, Term};
 use crate::config::NEWTON_MAX_ITER;
 use crate::error::GroupFault;
@@ -54,7 +54,8 @@ pub(crate) fn solve<T: Real>(
         }
         if res <= tol {
             gd.iterations = it;
-            return position_from_x(g, gd, model, bodies, q);
+            // The terms are cached at this `x` (just evaluated for the residual).
+            return position_from_terms(g, gd, model, bodies, q);
         }
         let w = jacobian(g, gd);
         let Some((inv, _)) = crate::linalg::invert(w, n) else {
