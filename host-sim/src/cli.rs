@@ -32,6 +32,8 @@ Scenarios: slider-crank, five-bar (mechanisms);
            ccc-s1, ccc-s2 (the Constantinesco torque converter, SPEC 3)
   Each ships as a run file, host-sim/scenarios/<name>.toml (embedded): copy one to
   start your own.
+Examples: host-sim/mechanisms/*.toml (run files), host-sim/sweeps/*.toml (sweep
+  files), host-sim/batches/*.batch (batch files).
 
 Options of run:
   --out FILE|-       write the CSV to FILE, the summary to stdout;
