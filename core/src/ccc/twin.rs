@@ -1078,41 +1078,46 @@ impl<T: Real> Twin<T> {
         inputs: &Inputs<T>,
         tol_w: T,
     ) -> Result<T, TwinError> {
-        let time = w.t.to_f64();
         // Physical angular speeds after the impact, from the reference model's V.
         let mut omega = [T::zero(); 9];
         for (p, o) in omega.iter_mut().enumerate().skip(1) {
             let [v0, v1] = self.reference.omega_row(p);
             *o = v0 * u_plus[0] + v1 * u_plus[1];
         }
-        // The first coordinate choice that assembles here and represents these speeds
-        // (a choice at its dead point maps them wrongly: the lever of A68 cannot carry
-        // a crank turning at its dead point).
+        // The first coordinate choice that assembles here, represents these speeds (a
+        // choice at its dead point maps them wrongly: the lever of A68 cannot carry a
+        // crank turning at its dead point) and is conditioned at least `switch_below`;
+        // else the best conditioned of those that carry the speeds (a later one only if
+        // 1.5 times better, as in `switch_coordinates`). Near its dead point a choice
+        // still carries the speeds, but the rest of the step in it is far off: A6 ->
+        // A68 with the lever at 0.003 lost 0.45 J of kinetic energy in one step.
         let scale_w = omega.iter().fold(T::one(), |a, w| a.max(w.abs()));
-        let mut ok = false;
+        // (conditioning, choice, speed gap) of the choice taken, and whether the
+        // candidate slot holds it.
+        let mut chosen: Option<(T, Coordinates, T)> = None;
+        let mut holds = false;
         for coords in m.coordinate_choices().iter().copied() {
-            let Ok(q) = self.cand.rebuild(&self.params, m, coords, pose, time) else {
-                continue;
-            };
-            let mut y = w.y;
-            load_state(&self.cand, &q, &omega, &mut y);
-            if self.cand.eval(w.t, &y, inputs, self.drive).is_err() {
+            if !self.load_candidate(w, m, coords, pose, &omega, inputs, scale_w) {
+                holds = false;
                 continue;
             }
-            let mapped = self.cand.links(&self.params);
-            let off = (1..9).fold(T::zero(), |e, p| e.max((mapped[p].omega - omega[p]).abs()));
-            self.speed_gap = off;
-            if !(off <= speed_tol::<T>() * scale_w) {
-                log::debug!("candidate {m} in {coords} coordinates cannot carry the speeds (off by {off:?} rad/s)");
-                continue;
+            let cond = self.cand.conditioning();
+            holds = chosen.is_none_or(|(c, _, _)| cond > c * T::c(1.5));
+            if holds {
+                chosen = Some((cond, coords, self.speed_gap));
             }
-            finish_accelerations(&self.cand.model, &mut self.cand.ws);
-            if reactions(&self.cand.model, &mut self.cand.ws, time).is_err() {
-                continue;
+            if chosen.is_some_and(|(c, _, _)| c >= self.settings.switch_below) {
+                break;
             }
-            ok = true;
-            break;
         }
+        let ok = match chosen {
+            Some((_, coords, gap)) => {
+                self.speed_gap = gap;
+                // The same pose and speeds: the same bits as in the scan.
+                holds || self.load_candidate(w, m, coords, pose, &omega, inputs, scale_w)
+            }
+            None => false,
+        };
         if !ok {
             return Ok(T::c(f64::INFINITY));
         }
@@ -1160,6 +1165,40 @@ impl<T: Real> Twin<T> {
             v += (-d * shaft_alpha - tol_a).max(T::zero()) / alpha_scale;
         }
         Ok(v)
+    }
+
+    /// Builds mode `m` driven by `coords` into the candidate slot at `pose` with the
+    /// physical speeds `omega` and evaluates it in full; `false` if it does not
+    /// assemble, fails, or cannot carry the speeds (its gap is left in `speed_gap`).
+    #[allow(clippy::too_many_arguments)]
+    fn load_candidate(
+        &mut self,
+        w: &Work<T>,
+        m: Mode,
+        coords: Coordinates,
+        pose: &[T; 9],
+        omega: &[T; 9],
+        inputs: &Inputs<T>,
+        scale_w: T,
+    ) -> bool {
+        let time = w.t.to_f64();
+        let Ok(q) = self.cand.rebuild(&self.params, m, coords, pose, time) else {
+            return false;
+        };
+        let mut y = w.y;
+        load_state(&self.cand, &q, omega, &mut y);
+        if self.cand.eval(w.t, &y, inputs, self.drive).is_err() {
+            return false;
+        }
+        let mapped = self.cand.links(&self.params);
+        let off = (1..9).fold(T::zero(), |e, p| e.max((mapped[p].omega - omega[p]).abs()));
+        self.speed_gap = off;
+        if !(off <= speed_tol::<T>() * scale_w) {
+            log::debug!("candidate {m} in {coords} coordinates cannot carry the speeds (off by {off:?} rad/s)");
+            return false;
+        }
+        finish_accelerations(&self.cand.model, &mut self.cand.ws);
+        reactions(&self.cand.model, &mut self.cand.ws, time).is_ok()
     }
 
     /// Tries the mode's other coordinate choices at `w`'s state and takes the best
