@@ -60,7 +60,12 @@ fn runs_through(params: CccParams<f64>, load: f64, t_end: f64) {
     let a = run(params, 1e-4, load, 12.0, t_end);
     let b = run(params, 5e-5, load, 12.0, t_end);
     for r in [&a, &b] {
-        assert!(r.end.is_none(), "stopped at {}: {}", r.t_end, r.end.as_ref().unwrap());
+        assert!(
+            r.end.is_none(),
+            "stopped at {}: {}",
+            r.t_end,
+            r.end.as_ref().unwrap()
+        );
         assert!(
             r.max_rel_residual < 1e-6,
             "audit residual {:.3e}",
@@ -72,7 +77,11 @@ fn runs_through(params: CccParams<f64>, load: f64, t_end: f64) {
     }
     assert_eq!(a.events.len(), b.events.len());
     for (x, y) in a.events.iter().zip(&b.events) {
-        assert_eq!((x.kind, x.from, x.to), (y.kind, y.from, y.to), "{x:?} vs {y:?}");
+        assert_eq!(
+            (x.kind, x.from, x.to),
+            (y.kind, y.from, y.to),
+            "{x:?} vs {y:?}"
+        );
         assert!((x.time - y.time).abs() < 1e-6, "{x:?} vs {y:?}");
     }
 }
@@ -97,5 +106,49 @@ fn rocker_variants_pass_the_a68_catch_at_the_lever_dead_point() {
         p.rocker_d = d;
         p.mass_at = at;
         runs_through(p, 800.0, 0.3);
+    }
+}
+
+/// T_r = 100 N·m (I8, 0.2784 s), T_r = 100 N·m with a 16 N·m motor (A8, 0.9054 s) and
+/// T_r = 0 (A8, 0.3238 s): D reaches |DH| = rod + lever, where both diode branches are
+/// stretched in line at once (equal branches: G and I coincide) and the two branches'
+/// constraints become one: the mechanism's own singularity (SPEC 3). The run ends
+/// there with an error that says so, names the groups and the time, at h and h/2.
+#[test]
+fn stretched_diode_ends_the_run_as_a_singularity() {
+    for (load, motor, t) in [
+        (100.0, 12.0, 0.2784),
+        (100.0, 16.0, 0.9054),
+        (0.0, 12.0, 0.3238),
+    ] {
+        for h in [1e-4, 5e-5] {
+            let r = run(CccParams::reference(), h, load, motor, t + 0.01);
+            let Some(end) = &r.end else {
+                panic!("T_r = {load}, motor {motor}, h = {h}: should end at the stretched diode");
+            };
+            assert!(end.at_singularity(), "{end}");
+            let msg = end.to_string();
+            assert!(
+                msg.contains("RRR(5,6)") && msg.contains("RRR(7,8)"),
+                "{msg}"
+            );
+            assert!(msg.contains("stretched"), "{msg}");
+            assert!(
+                (r.t_end - t).abs() < 2e-4,
+                "T_r = {load}, h = {h}: ends at {}",
+                r.t_end
+            );
+            // The oracle: the diode's geometry at the last good state.
+            assert!(
+                r.stretch <= 0.0 && r.stretch > -1e-4,
+                "T_r = {load}, h = {h}: |DH| - 0.95 = {:.3e}",
+                r.stretch
+            );
+            assert!(
+                r.max_rel_residual < 1e-6,
+                "audit {:.3e}",
+                r.max_rel_residual
+            );
+        }
     }
 }

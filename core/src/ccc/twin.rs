@@ -10,7 +10,7 @@
 //! event functions are re-checked there): no event is lost, it is late by under one
 //! step, and the twin cannot chatter.
 
-use super::build::{initial_pose, BRANCHES, CRANK};
+use super::build::{initial_pose, BRANCHES, CRANK, ROCKER};
 use super::mode::{Clutch, Coordinates, Mode};
 use super::params::CccParams;
 use super::slot::{
@@ -207,6 +207,26 @@ pub enum TwinError {
         /// The worst-conditioned group of the sequence (fault: its conditioning).
         worst: Failure,
     },
+    /// A diode branch's rod and lever came in line (stretched, |DH| = rod + lever, or
+    /// folded) and the step could not go on: a singularity of the mechanism itself
+    /// (SPEC 3, the end of S1). The branch's dyad loses rank; with the reference's equal
+    /// branches both come in line at once, G and I meet, and the two branches'
+    /// constraints become one. Replaces the [`TwinError::Mechanism`] or singular
+    /// [`TwinError::Diverged`] error it explains.
+    Diode {
+        /// Time of the last good state, s (the failing step starts there).
+        time: f64,
+        /// The mode.
+        mode: Mode,
+        /// |DH| at the last good state, m.
+        reach: f64,
+        /// Per branch (rod 5 and lever 6, rod 7 and lever 8): |sin| of the angle between
+        /// rod and lever at the last good state (0: in line). A branch is named in line
+        /// under [`SINGULAR_CONDITIONING`].
+        sines: [f64; 2],
+        /// Rod plus lever of each branch, m (the stretched reach).
+        stretched_reach: [f64; 2],
+    },
     /// A turning shaft with J_s > 0 would leave both levers and coast: not modelled.
     Coasting {
         /// Time, s.
@@ -253,6 +273,36 @@ impl fmt::Display for TwinError {
                 worst.group,
                 worst.fault
             ),
+            TwinError::Diode {
+                time,
+                mode,
+                reach,
+                sines,
+                stretched_reach,
+            } => {
+                write!(
+                    f,
+                    "t = {time:.6} s: mode {mode}: a singularity of the mechanism: the diode's rods and levers in line, "
+                )?;
+                let mut first = true;
+                for ((sine, full), (rod, lever)) in sines.iter().zip(stretched_reach).zip(BRANCHES) {
+                    if *sine < SINGULAR_CONDITIONING {
+                        let sep = if first { "" } else { " and " };
+                        let how = if *reach > full * 0.5 {
+                            "stretched"
+                        } else {
+                            "folded"
+                        };
+                        write!(f, "{sep}RRR({rod},{lever}) {how} (|sin| {sine:.1e})")?;
+                        first = false;
+                    }
+                }
+                write!(
+                    f,
+                    ", |DH| = {reach:.7} m of rod + lever = {:.7} m: their constraints lose rank, no coordinate choice drives it",
+                    stretched_reach[0]
+                )
+            }
             TwinError::Coasting { time } => write!(
                 f,
                 "t = {time:.6} s: the shaft would coast free of both levers (J_s > 0), which is not modelled"
@@ -272,7 +322,7 @@ impl TwinError {
     /// end of S1), rather than at a bad input, a setting or a step too coarse.
     pub fn at_singularity(&self) -> bool {
         match self {
-            TwinError::Mechanism { .. } => true,
+            TwinError::Mechanism { .. } | TwinError::Diode { .. } => true,
             TwinError::Diverged { worst, .. } => matches!(
                 worst.fault,
                 GroupFault::Singular { conditioning } if conditioning < SINGULAR_CONDITIONING
@@ -516,7 +566,36 @@ impl<T: Real> Twin<T> {
             }
         }
         (self.events, self.switches, self.candidates) = log;
+        if failure.at_singularity() {
+            if let Some(e) = self.diode_in_line() {
+                return Err(e);
+            }
+        }
         Err(failure)
+    }
+
+    /// [`TwinError::Diode`] if a diode branch's rod and lever are in line at the last
+    /// good state (|sin| of their angle under [`SINGULAR_CONDITIONING`]).
+    fn diode_in_line(&self) -> Option<TwinError> {
+        let reach = (self.joint_position(ROCKER, 2) - self.params.h).norm();
+        let mut sines = [1.0; 2];
+        let mut stretched_reach = [0.0; 2];
+        for ((sine, full), (rod, lever)) in sines.iter_mut().zip(&mut stretched_reach).zip(BRANCHES)
+        {
+            let (r, l) = (self.link(rod), self.link(lever));
+            *sine = (r.theta - l.theta).sin().abs().to_f64();
+            *full = (self.params.link(rod).length + self.params.link(lever).length).to_f64();
+        }
+        if !sines.iter().any(|s| *s < SINGULAR_CONDITIONING) {
+            return None;
+        }
+        Some(TwinError::Diode {
+            time: self.t.to_f64(),
+            mode: self.slot.mode,
+            reach: reach.to_f64(),
+            sines,
+            stretched_reach,
+        })
     }
 
     /// A step's working state, starting from the twin's last good state.
