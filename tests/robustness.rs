@@ -377,6 +377,7 @@ fn twin_error_time(e: &TwinError) -> Option<f64> {
         TwinError::Step(s) => Some(s.time()),
         TwinError::Mechanism { time, .. }
         | TwinError::Diverged { time, .. }
+        | TwinError::Diode { time, .. }
         | TwinError::Coasting { time } => Some(*time),
     }
 }

@@ -88,10 +88,10 @@ const PINS: &[Pin<'static>] = &[
     Pin {
         args: "ccc-s2",
         exit: 0,
-        csv: "51663f8bc00ee7c174303348fb1b6985bc82f3eb605990dd7e3357dc91adcc51",
+        csv: "cb1d70efbd46bd6209baa6091101e4403ef8c19863c93cf1d15cf319c2d3b44f",
         logs: Some((
-            "d8d2b53c47ddbfeb6a4d6bf25d71d81309040b0c9f462e13abd4b06a6e718186",
-            "c6082f21edea362f1a163d280cf43469b4dd60a6a58db2821309fd42a1fc19e5",
+            "2f46758ee53087a70973a61a9eee10a5b27fdf2a37b70c60c2c6a042024d5056",
+            "76eb19d4aaf704a87f2a7fd1d5042fc477023fcf23a9f8291b36c1b348c4cfec",
         )),
     },
     Pin {
@@ -121,10 +121,10 @@ const PINS: &[Pin<'static>] = &[
     Pin {
         args: "ccc-s2 --f32",
         exit: 0,
-        csv: "8632289b5c5c3875eed81cae7e0b179aedfe68a9e8ebc26da25836a1d65caa0e",
+        csv: "338cdf322a4d7d244b613a668380dbaaad31863af13da85adb364996e9b12a05",
         logs: Some((
-            "bd61bc4bcc45dfcc095135237820e0205ef4a8a6bb4e68f577c01a51e2fb37ff",
-            "93b41199f12f5980653a67462f012939d6fa9239f49f079974a58fa9da92f032",
+            "95079bc7b11d26f595b4ff6b2f6060ca18835ce359ff8234d5a01b8a4183461d",
+            "c577aee19c65235c3c79ee2a3605000dcb01c56fffcd8ccd6acab92a4c7bf7bb",
         )),
     },
 ];

@@ -10,7 +10,7 @@
 //! event functions are re-checked there): no event is lost, it is late by under one
 //! step, and the twin cannot chatter.
 
-use super::build::{initial_pose, BRANCHES, CRANK};
+use super::build::{initial_pose, BRANCHES, CRANK, ROCKER};
 use super::mode::{Clutch, Coordinates, Mode};
 use super::params::CccParams;
 use super::slot::{
@@ -207,6 +207,26 @@ pub enum TwinError {
         /// The worst-conditioned group of the sequence (fault: its conditioning).
         worst: Failure,
     },
+    /// A diode branch's rod and lever came in line (stretched, |DH| = rod + lever, or
+    /// folded) and the step could not go on: a singularity of the mechanism itself
+    /// (SPEC 3, the end of S1). The branch's dyad loses rank; with the reference's equal
+    /// branches both come in line at once, G and I meet, and the two branches'
+    /// constraints become one. Replaces the [`TwinError::Mechanism`] or singular
+    /// [`TwinError::Diverged`] error it explains.
+    Diode {
+        /// Time of the last good state, s (the failing step starts there).
+        time: f64,
+        /// The mode.
+        mode: Mode,
+        /// |DH| at the last good state, m.
+        reach: f64,
+        /// Per branch (rod 5 and lever 6, rod 7 and lever 8): |sin| of the angle between
+        /// rod and lever at the last good state (0: in line). A branch is named in line
+        /// under [`SINGULAR_CONDITIONING`].
+        sines: [f64; 2],
+        /// Rod plus lever of each branch, m (the stretched reach).
+        stretched_reach: [f64; 2],
+    },
     /// A turning shaft with J_s > 0 would leave both levers and coast: not modelled.
     Coasting {
         /// Time, s.
@@ -253,6 +273,36 @@ impl fmt::Display for TwinError {
                 worst.group,
                 worst.fault
             ),
+            TwinError::Diode {
+                time,
+                mode,
+                reach,
+                sines,
+                stretched_reach,
+            } => {
+                write!(
+                    f,
+                    "t = {time:.6} s: mode {mode}: a singularity of the mechanism: the diode's rods and levers in line, "
+                )?;
+                let mut first = true;
+                for ((sine, full), (rod, lever)) in sines.iter().zip(stretched_reach).zip(BRANCHES) {
+                    if *sine < SINGULAR_CONDITIONING {
+                        let sep = if first { "" } else { " and " };
+                        let how = if *reach > full * 0.5 {
+                            "stretched"
+                        } else {
+                            "folded"
+                        };
+                        write!(f, "{sep}RRR({rod},{lever}) {how} (|sin| {sine:.1e})")?;
+                        first = false;
+                    }
+                }
+                write!(
+                    f,
+                    ", |DH| = {reach:.7} m of rod + lever = {:.7} m: their constraints lose rank, no coordinate choice drives it",
+                    stretched_reach[0]
+                )
+            }
             TwinError::Coasting { time } => write!(
                 f,
                 "t = {time:.6} s: the shaft would coast free of both levers (J_s > 0), which is not modelled"
@@ -272,7 +322,7 @@ impl TwinError {
     /// end of S1), rather than at a bad input, a setting or a step too coarse.
     pub fn at_singularity(&self) -> bool {
         match self {
-            TwinError::Mechanism { .. } => true,
+            TwinError::Mechanism { .. } | TwinError::Diode { .. } => true,
             TwinError::Diverged { worst, .. } => matches!(
                 worst.fault,
                 GroupFault::Singular { conditioning } if conditioning < SINGULAR_CONDITIONING
@@ -516,7 +566,36 @@ impl<T: Real> Twin<T> {
             }
         }
         (self.events, self.switches, self.candidates) = log;
+        if failure.at_singularity() {
+            if let Some(e) = self.diode_in_line() {
+                return Err(e);
+            }
+        }
         Err(failure)
+    }
+
+    /// [`TwinError::Diode`] if a diode branch's rod and lever are in line at the last
+    /// good state (|sin| of their angle under [`SINGULAR_CONDITIONING`]).
+    fn diode_in_line(&self) -> Option<TwinError> {
+        let reach = (self.joint_position(ROCKER, 2) - self.params.h).norm();
+        let mut sines = [1.0; 2];
+        let mut stretched_reach = [0.0; 2];
+        for ((sine, full), (rod, lever)) in sines.iter_mut().zip(&mut stretched_reach).zip(BRANCHES)
+        {
+            let (r, l) = (self.link(rod), self.link(lever));
+            *sine = (r.theta - l.theta).sin().abs().to_f64();
+            *full = (self.params.link(rod).length + self.params.link(lever).length).to_f64();
+        }
+        if !sines.iter().any(|s| *s < SINGULAR_CONDITIONING) {
+            return None;
+        }
+        Some(TwinError::Diode {
+            time: self.t.to_f64(),
+            mode: self.slot.mode,
+            reach: reach.to_f64(),
+            sines,
+            stretched_reach,
+        })
     }
 
     /// A step's working state, starting from the twin's last good state.
@@ -1081,41 +1160,46 @@ impl<T: Real> Twin<T> {
         inputs: &Inputs<T>,
         tol_w: T,
     ) -> Result<T, TwinError> {
-        let time = w.t.to_f64();
         // Physical angular speeds after the impact, from the reference model's V.
         let mut omega = [T::zero(); 9];
         for (p, o) in omega.iter_mut().enumerate().skip(1) {
             let [v0, v1] = self.reference.omega_row(p);
             *o = v0 * u_plus[0] + v1 * u_plus[1];
         }
-        // The first coordinate choice that assembles here and represents these speeds
-        // (a choice at its dead point maps them wrongly: the lever of A68 cannot carry
-        // a crank turning at its dead point).
+        // The first coordinate choice that assembles here, represents these speeds (a
+        // choice at its dead point maps them wrongly: the lever of A68 cannot carry a
+        // crank turning at its dead point) and is conditioned at least `switch_below`;
+        // else the best conditioned of those that carry the speeds (a later one only if
+        // 1.5 times better, as in `switch_coordinates`). Near its dead point a choice
+        // still carries the speeds, but the rest of the step in it is far off: A6 ->
+        // A68 with the lever at 0.003 lost 0.45 J of kinetic energy in one step.
         let scale_w = omega.iter().fold(T::one(), |a, w| a.max(w.abs()));
-        let mut ok = false;
+        // (conditioning, choice, speed gap) of the choice taken, and whether the
+        // candidate slot holds it.
+        let mut chosen: Option<(T, Coordinates, T)> = None;
+        let mut holds = false;
         for coords in m.coordinate_choices().iter().copied() {
-            let Ok(q) = self.cand.rebuild(&self.params, m, coords, pose, time) else {
-                continue;
-            };
-            let mut y = w.y;
-            load_state(&self.cand, &q, &omega, &mut y);
-            if self.cand.eval(w.t, &y, inputs, self.drive).is_err() {
+            if !self.load_candidate(w, m, coords, pose, &omega, inputs, scale_w) {
+                holds = false;
                 continue;
             }
-            let mapped = self.cand.links(&self.params);
-            let off = (1..9).fold(T::zero(), |e, p| e.max((mapped[p].omega - omega[p]).abs()));
-            self.speed_gap = off;
-            if !(off <= speed_tol::<T>() * scale_w) {
-                log::debug!("candidate {m} in {coords} coordinates cannot carry the speeds (off by {off:?} rad/s)");
-                continue;
+            let cond = self.cand.conditioning();
+            holds = chosen.is_none_or(|(c, _, _)| cond > c * T::c(1.5));
+            if holds {
+                chosen = Some((cond, coords, self.speed_gap));
             }
-            finish_accelerations(&self.cand.model, &mut self.cand.ws);
-            if reactions(&self.cand.model, &mut self.cand.ws, time).is_err() {
-                continue;
+            if chosen.is_some_and(|(c, _, _)| c >= self.settings.switch_below) {
+                break;
             }
-            ok = true;
-            break;
         }
+        let ok = match chosen {
+            Some((_, coords, gap)) => {
+                self.speed_gap = gap;
+                // The same pose and speeds: the same bits as in the scan.
+                holds || self.load_candidate(w, m, coords, pose, &omega, inputs, scale_w)
+            }
+            None => false,
+        };
         if !ok {
             return Ok(T::c(f64::INFINITY));
         }
@@ -1163,6 +1247,40 @@ impl<T: Real> Twin<T> {
             v += (-d * shaft_alpha - tol_a).max(T::zero()) / alpha_scale;
         }
         Ok(v)
+    }
+
+    /// Builds mode `m` driven by `coords` into the candidate slot at `pose` with the
+    /// physical speeds `omega` and evaluates it in full; `false` if it does not
+    /// assemble, fails, or cannot carry the speeds (its gap is left in `speed_gap`).
+    #[allow(clippy::too_many_arguments)]
+    fn load_candidate(
+        &mut self,
+        w: &Work<T>,
+        m: Mode,
+        coords: Coordinates,
+        pose: &[T; 9],
+        omega: &[T; 9],
+        inputs: &Inputs<T>,
+        scale_w: T,
+    ) -> bool {
+        let time = w.t.to_f64();
+        let Ok(q) = self.cand.rebuild(&self.params, m, coords, pose, time) else {
+            return false;
+        };
+        let mut y = w.y;
+        load_state(&self.cand, &q, omega, &mut y);
+        if self.cand.eval(w.t, &y, inputs, self.drive).is_err() {
+            return false;
+        }
+        let mapped = self.cand.links(&self.params);
+        let off = (1..9).fold(T::zero(), |e, p| e.max((mapped[p].omega - omega[p]).abs()));
+        self.speed_gap = off;
+        if !(off <= speed_tol::<T>() * scale_w) {
+            log::debug!("candidate {m} in {coords} coordinates cannot carry the speeds (off by {off:?} rad/s)");
+            return false;
+        }
+        finish_accelerations(&self.cand.model, &mut self.cand.ws);
+        reactions(&self.cand.model, &mut self.cand.ws, time).is_ok()
     }
 
     /// Tries the mode's other coordinate choices at `w`'s state and takes the best
