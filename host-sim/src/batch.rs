@@ -216,8 +216,9 @@ impl Outcome {
         }
     }
 
-    /// How the run ended, one word: `completed`, `singularity` (`ccc-s1`'s expected
-    /// end), `failed` (a step failed) or `error` (setup, options, files).
+    /// How the run ended, one word: `completed`, `singularity` (at a singularity of
+    /// the mechanism: `ccc-s1`'s expected end, or the diode's rods and levers in line),
+    /// `failed` (a step failed otherwise) or `error` (setup, options, files).
     pub fn end(&self) -> &'static str {
         match self {
             Outcome::Mechanism(Ok(_))
@@ -226,9 +227,9 @@ impl Outcome {
                 ..
             })) => "completed",
             Outcome::Converter(Ok(CccSummary {
-                end: End::Stopped { expected: true, .. },
+                end: End::Stopped { error, .. },
                 ..
-            })) => "singularity",
+            })) if error.at_singularity() => "singularity",
             Outcome::Converter(Ok(_))
             | Outcome::Mechanism(Err(RunError::Step { .. } | RunError::Integrator { .. })) => {
                 "failed"

@@ -114,8 +114,10 @@ Batch (host-sim batch FILE --out-dir DIR):
   job line scenario args file   job index, its line in FILE, the scenario, the
                                 line's arguments, the job's CSV file name
   exit end                      the exit status the run alone gives; how it ended:
-                                completed, singularity (ccc-s1's expected end), failed
-                                (a step failed) or error (setup, file)
+                                completed, singularity (at a singularity of the
+                                mechanism: ccc-s1's expected end, or the diode's rods
+                                and levers in line), failed (a step failed otherwise)
+                                or error (setup, file)
   steps time rows               steps completed, time of the last state, s (empty when a
                                 mechanism's step failed), CSV data rows
   first_breakaway events switches audit_residual
@@ -185,8 +187,8 @@ base run, N at a time; example: host-sim/sweeps/mass-motor.toml
   heatmap<n>-<metric>.svg and .png per [[heatmap]] (with -<k> per combination of the
   other axes' values). The summary gives the lowest and highest value of each
   heat-map's metric and the variant that gave it. A variant that fails is a row
-  (end = failed), not a failure of the sweep: exit status 0 when the files are
-  written.
+  (end = singularity or failed, as in batch.csv), not a failure of the sweep: exit
+  status 0 when the files are written.
 
 Exit status: 0 success, 1 run failure (step error, file error), 2 bad arguments or a
 bad run file.

@@ -938,7 +938,19 @@ fn report(
     pictures: &[PathBuf],
 ) -> io::Result<()> {
     let total = runs.len();
-    let completed = runs.iter().filter(|o| o.end == "completed").count();
+    // How they ended, in batch.csv's words; "0 completed" is said, other zeros not.
+    let ends = ["completed", "singularity", "failed", "error"]
+        .iter()
+        .filter_map(|&end| {
+            let n = runs.iter().filter(|o| o.end == end).count();
+            let what = match end {
+                "singularity" => "at a singularity of the mechanism",
+                other => other,
+            };
+            (n > 0 || end == "completed").then(|| format!("{n} {what}"))
+        })
+        .collect::<Vec<_>>()
+        .join(", ");
     let axes = sweep
         .axes
         .iter()
@@ -947,11 +959,10 @@ fn report(
         .join(" × ");
     writeln!(
         w,
-        "sweep     {total} variants of {} ({axes}) on {threads} thread{} in {:.3} s: {completed} completed, {} ended otherwise",
+        "sweep     {total} variants of {} ({axes}) on {threads} thread{} in {:.3} s: {ends}",
         sweep.base,
         if threads == 1 { "" } else { "s" },
         wall.as_secs_f64(),
-        total - completed
     )?;
     writeln!(w, "table     {}", table.display())?;
     for p in pictures {

@@ -309,3 +309,39 @@ fn example_sweeps_parse() {
         }
     }
 }
+
+/// A variant that ends at a singularity of the mechanism (S2 without load: the engaged
+/// lever carries nothing, the rocker swings out until both diode branches are stretched,
+/// |DH| = rod + lever, at 0.3238 s) is a row that says so, not a failure of the sweep.
+#[test]
+fn a_variant_at_a_singularity_is_a_row() {
+    let dir = TempDir::new("sweep-singular");
+    let text = "base = \"ccc-s2\"\n[set]\n\"run.t_end\" = 0.33\n[[axis]]\nkey = \"run.load\"\nvalues = [0.0]\n";
+    let file = sweep_file(&dir, text);
+    let out = dir.join("out");
+    let (code, stdout, err) = run(&["sweep", &file, "--out-dir", &out, "--progress", "none"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        stdout.contains("1 variants of ccc-s2 (1 run.load) on 1 thread")
+            && stdout.contains(": 0 completed, 1 at a singularity of the mechanism"),
+        "{stdout}"
+    );
+    assert!(
+        err.contains("variant 0 (run.load = 0)") && err.contains("rods and levers in line"),
+        "{err}"
+    );
+    let table = rows(&read(&Path::new(&out).join("sweep.csv")));
+    assert_eq!(table.len(), 1);
+    let row = &table[0];
+    assert_eq!(
+        (row["exit"].as_str(), row["end"].as_str()),
+        ("1", "singularity")
+    );
+    let t: f64 = row["time"].parse().unwrap();
+    assert!((t - 0.3238).abs() < 2e-4, "{t}");
+    // It broke away long before (there is no load to hold the shaft).
+    assert!(
+        row["first_breakaway"].parse::<f64>().unwrap() < 0.1,
+        "{row:?}"
+    );
+}
