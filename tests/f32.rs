@@ -209,3 +209,57 @@ fn five_bar_f32_follows_f64_for_half_a_second() {
         (a2 - b2).abs()
     );
 }
+
+/// S1 (free mode, 12 N·m, from rest) ends where the diode's rods and levers come in line
+/// (|DH| = rod + lever): in f64 at 0.3238 s with |sin| 3.4e-3; in f32 rounding breaks
+/// the energy balance some steps before, and the twin must still call it the
+/// mechanism's singularity (not "the step is too coarse"): both branches closing, in
+/// line within the horizon at their rate, |DH| within 0.5 mm of rod + lever.
+#[test]
+fn s1_f32_ends_at_the_diode_singularity_like_f64() {
+    fn end<T: Real>() -> TwinError {
+        let mut settings = TwinSettings::reference(T::c(1e-4));
+        settings.clutch = false;
+        let inputs = Inputs {
+            motor: MotorInput::Law(Motor::Constant(T::c(12.0))),
+            load: T::zero(),
+            measured: None,
+        };
+        let mut twin = Twin::new(CccParams::<T>::reference(), settings, inputs).unwrap();
+        for _ in 0..5000 {
+            if let Err(e) = twin.step(&inputs) {
+                return e;
+            }
+        }
+        panic!("S1 ran past 0.5 s");
+    }
+    let (e64, e32) = (end::<f64>(), end::<f32>());
+    let diode = |e: &TwinError| match *e {
+        TwinError::Diode {
+            time,
+            reach,
+            sines,
+            stretched_reach,
+            in_line,
+            closing_in,
+            ..
+        } => (time, reach, sines, stretched_reach, in_line, closing_in),
+        ref other => panic!("not the diode's singularity: {other}"),
+    };
+    let (t64, _, s64, _, in64, _) = diode(&e64);
+    let (t32, reach, s32, full, in32, closing) = diode(&e32);
+    assert!(e32.at_singularity() && e64.at_singularity());
+    assert!(s64.iter().all(|s| *s < 1e-2), "{s64:?}");
+    assert_eq!((in64, in32), ([true; 2], [true; 2]));
+    assert!((t64 - 0.3238).abs() < 2e-4, "{t64}");
+    assert!(t32 <= t64 && t64 - t32 < 3e-3, "f32 {t32} vs f64 {t64}");
+    // The independent check: the geometry at f32's last good state.
+    assert!(
+        (full[0] - reach).abs() < 5e-4,
+        "|DH| = {reach} of {}",
+        full[0]
+    );
+    assert!(s32.iter().all(|s| *s < 0.1), "{s32:?}");
+    assert!(closing.iter().all(|c| *c < 32.0 * 1e-4), "{closing:?}");
+    assert!(e32.to_string().contains("in line in"), "{e32}");
+}

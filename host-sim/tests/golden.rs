@@ -58,9 +58,9 @@ struct Pin<'a> {
 /// The pins. The same in the debug (test) profile and with `--release`: checked when
 /// they were minted, by `cargo test -p host-sim --test golden` and
 /// `cargo test --release -p host-sim --test golden` (x86_64 Linux, rustc 1.95).
-/// `ccc-s1` ends at the mechanism's singularity (its expected end, exit status 0);
-/// `ccc-s1 --f32` ends with a step that breaks the energy balance (exit status 1): what
-/// it wrote up to there is deterministic all the same. Both S1 logs hold only their
+/// `ccc-s1` ends at the mechanism's singularity (its expected end, exit status 0), and
+/// so does `ccc-s1 --f32`, 1.1 ms earlier: rounding breaks its energy balance while the
+/// diode's branches are 1.2 ms from in line (`TwinError::Diode`'s horizon). Both S1 logs hold only their
 /// header (free mode has no start event and S1 no coordinate switch), hence the same
 /// log hashes.
 const PINS: &[Pin<'static>] = &[
@@ -111,7 +111,7 @@ const PINS: &[Pin<'static>] = &[
     },
     Pin {
         args: "ccc-s1 --f32",
-        exit: 1,
+        exit: 0,
         csv: "024dcc92e288b56cc54cbf13191333b9bfaacfd9f4549c1e0339a69242279572",
         logs: Some((
             "2a18d19a58b935cc5a81a088e9c456f81ad855f74a9f76a5d7ec92b8b8ba339b",

@@ -221,9 +221,15 @@ pub enum TwinError {
         /// |DH| at the last good state, m.
         reach: f64,
         /// Per branch (rod 5 and lever 6, rod 7 and lever 8): |sin| of the angle between
-        /// rod and lever at the last good state (0: in line). A branch is named in line
-        /// under [`SINGULAR_CONDITIONING`].
+        /// rod and lever at the last good state (0: in line).
         sines: [f64; 2],
+        /// Per branch: whether it is named in line: |sin| under
+        /// [`SINGULAR_CONDITIONING`], or closing so fast that it reaches 0 within
+        /// [`DIODE_HORIZON_STEPS`] steps at its present rate.
+        in_line: [bool; 2],
+        /// Per branch: |sin| over its rate of decrease, s (the time to in line at the
+        /// present rate; infinite when it is not closing).
+        closing_in: [f64; 2],
         /// Rod plus lever of each branch, m (the stretched reach).
         stretched_reach: [f64; 2],
     },
@@ -279,23 +285,35 @@ impl fmt::Display for TwinError {
                 reach,
                 sines,
                 stretched_reach,
+                in_line,
+                closing_in,
             } => {
                 write!(
                     f,
                     "t = {time:.6} s: mode {mode}: a singularity of the mechanism: the diode's rods and levers in line, "
                 )?;
                 let mut first = true;
-                for ((sine, full), (rod, lever)) in sines.iter().zip(stretched_reach).zip(BRANCHES) {
-                    if *sine < SINGULAR_CONDITIONING {
-                        let sep = if first { "" } else { " and " };
-                        let how = if *reach > full * 0.5 {
-                            "stretched"
-                        } else {
-                            "folded"
-                        };
-                        write!(f, "{sep}RRR({rod},{lever}) {how} (|sin| {sine:.1e})")?;
-                        first = false;
+                for (k, (rod, lever)) in BRANCHES.into_iter().enumerate() {
+                    let (Some(sine), Some(full), Some(true), Some(within)) = (
+                        sines.get(k),
+                        stretched_reach.get(k),
+                        in_line.get(k).copied(),
+                        closing_in.get(k),
+                    ) else {
+                        continue;
+                    };
+                    let sep = if first { "" } else { " and " };
+                    let how = if *reach > full * 0.5 {
+                        "stretched"
+                    } else {
+                        "folded"
+                    };
+                    write!(f, "{sep}RRR({rod},{lever}) {how} (|sin| {sine:.1e}")?;
+                    if *sine >= SINGULAR_CONDITIONING {
+                        write!(f, ", in line in {:.2} ms at its rate", within * 1e3)?;
                     }
+                    f.write_str(")")?;
+                    first = false;
                 }
                 write!(
                     f,
@@ -316,6 +334,13 @@ impl core::error::Error for TwinError {}
 /// Below this conditioning of its worst group, a [`TwinError::Diverged`] step is taken
 /// to run into a singularity of the mechanism rather than to be too coarse.
 pub const SINGULAR_CONDITIONING: f64 = 1e-2;
+
+/// A diode branch whose rod and lever come in line within this many steps at their
+/// present rate counts as in line when a step fails ([`TwinError::Diode`]). In f64 the
+/// branch's |sin| is under [`SINGULAR_CONDITIONING`] by then; in f32 rounding breaks
+/// the energy balance 8 to 16 steps before (S1 at h = 1e-4 s: 0.3227 s against f64's
+/// 0.3238 s), at |sin| of 3e-2 to 6e-2.
+pub const DIODE_HORIZON_STEPS: f64 = 32.0;
 
 impl TwinError {
     /// Whether the twin stopped at a singularity of the mechanism itself (SPEC 3: the
@@ -566,7 +591,10 @@ impl<T: Real> Twin<T> {
             }
         }
         (self.events, self.switches, self.candidates) = log;
-        if failure.at_singularity() {
+        // A step that fails near the diode's limit is the mechanism's singularity, also
+        // when rounding (f32) breaks the energy balance some steps before the groups'
+        // conditioning falls under SINGULAR_CONDITIONING.
+        if failure.at_singularity() || matches!(failure, TwinError::Diverged { .. }) {
             if let Some(e) = self.diode_in_line() {
                 return Err(e);
             }
@@ -575,18 +603,39 @@ impl<T: Real> Twin<T> {
     }
 
     /// [`TwinError::Diode`] if a diode branch's rod and lever are in line at the last
-    /// good state (|sin| of their angle under [`SINGULAR_CONDITIONING`]).
+    /// good state: |sin| of their angle under [`SINGULAR_CONDITIONING`], or closing
+    /// towards 0 fast enough to get there within [`DIODE_HORIZON_STEPS`] steps
+    /// (d|sin Δ|/dt = sign(sin Δ)·cos Δ·(ω_rod − ω_lever), Δ = θ_rod − θ_lever).
     fn diode_in_line(&self) -> Option<TwinError> {
         let reach = (self.joint_position(ROCKER, 2) - self.params.h).norm();
+        let horizon = DIODE_HORIZON_STEPS * self.h().to_f64();
         let mut sines = [1.0; 2];
         let mut stretched_reach = [0.0; 2];
-        for ((sine, full), (rod, lever)) in sines.iter_mut().zip(&mut stretched_reach).zip(BRANCHES)
-        {
+        let mut in_line = [false; 2];
+        let mut closing_in = [f64::INFINITY; 2];
+        for (k, (rod, lever)) in BRANCHES.into_iter().enumerate() {
             let (r, l) = (self.link(rod), self.link(lever));
-            *sine = (r.theta - l.theta).sin().abs().to_f64();
-            *full = (self.params.link(rod).length + self.params.link(lever).length).to_f64();
+            let delta = r.theta - l.theta;
+            let (sin, cos) = (delta.sin().to_f64(), delta.cos().to_f64());
+            let rate = sin.signum() * cos * (r.omega - l.omega).to_f64();
+            let sine = sin.abs();
+            let within = if rate < 0.0 {
+                sine / -rate
+            } else {
+                f64::INFINITY
+            };
+            let full = (self.params.link(rod).length + self.params.link(lever).length).to_f64();
+            if let (Some(s), Some(fr), Some(il), Some(ci)) = (
+                sines.get_mut(k),
+                stretched_reach.get_mut(k),
+                in_line.get_mut(k),
+                closing_in.get_mut(k),
+            ) {
+                (*s, *fr, *ci) = (sine, full, within);
+                *il = sine < SINGULAR_CONDITIONING || within < horizon;
+            }
         }
-        if !sines.iter().any(|s| *s < SINGULAR_CONDITIONING) {
+        if !in_line.iter().any(|b| *b) {
             return None;
         }
         Some(TwinError::Diode {
@@ -595,6 +644,8 @@ impl<T: Real> Twin<T> {
             reach: reach.to_f64(),
             sines,
             stretched_reach,
+            in_line,
+            closing_in,
         })
     }
 
