@@ -16,5 +16,6 @@ mod twin;
 pub use slot::{Inputs, LinkState, MotorInput, JOINTS, JOINT_NAMES};
 pub use twin::{
     Audit, CoordinateSwitch, Event, EventKind, Failure, Twin, TwinError, TwinSettings,
-    MAX_EVENTS_PER_STEP, MAX_LOCATE_ITER, MAX_RETRIES, SINGULAR_CONDITIONING, SUBSTEPS,
+    DIODE_HORIZON_STEPS, MAX_EVENTS_PER_STEP, MAX_LOCATE_ITER, MAX_RETRIES, SINGULAR_CONDITIONING,
+    SUBSTEPS,
 };
