@@ -43,7 +43,8 @@ Options of run:
                      runs ceil(t_end / h) fixed steps
   --every N          write every N-th step (default: the file's, else 1); the row at
                      t = 0 is always written
-  --f32              run the core in single precision (f32; default: the file's)
+  --f32, --f64       run the core in single (f32) or double (f64) precision
+                     (default: the file's f32 key, else f64)
   --quiet            no summary
   --plot DIR         draw the run's plots into DIR (created if missing), each as .svg
                      and .png: converter: crank, motor_torque, reactions, speeds,
@@ -454,7 +455,8 @@ fn parse_run(args: &[String]) -> Result<Command, UsageError> {
     let mut scenario = None;
     let mut out = Output::Stdout;
     let (mut h, mut t_end, mut every) = (None, None, None);
-    let (mut f32, mut quiet, mut ccw) = (false, false, false);
+    // `--f32` / `--f64`: the precision, over the run file's `f32`.
+    let (mut single, mut quiet, mut ccw): (Option<bool>, bool, bool) = (None, false, false);
     let (mut load, mut motor) = (None, None);
     let (mut plot, mut animate, mut fps, mut slow) = (None, Vec::new(), None, None);
     let mut k = 0;
@@ -476,10 +478,16 @@ fn parse_run(args: &[String]) -> Result<Command, UsageError> {
         }
         let (name, inline) = split_option(arg);
         match name {
-            "--f32" | "--quiet" | "--ccw" => {
+            "--f32" | "--f64" | "--quiet" | "--ccw" => {
                 no_value(name, inline, arg)?;
                 match name {
-                    "--f32" => f32 = true,
+                    "--f32" | "--f64" => {
+                        let want = name == "--f32";
+                        if single.is_some_and(|s| s != want) {
+                            return Err(usage_err("--f32 and --f64: give one precision"));
+                        }
+                        single = Some(want);
+                    }
                     "--quiet" => quiet = true,
                     _ => ccw = true,
                 }
@@ -525,7 +533,7 @@ fn parse_run(args: &[String]) -> Result<Command, UsageError> {
     // The run file's own output settings, unless the command line gives them.
     let file = scenario.run_file().ok();
     let every = every.unwrap_or_else(|| file.as_ref().map_or(1, |f| f.run.every));
-    let f32 = f32 || file.is_some_and(|f| f.run.f32);
+    let f32 = single.unwrap_or_else(|| file.is_some_and(|f| f.run.f32));
     Ok(Command::Run(RunOptions {
         scenario,
         out,
@@ -853,6 +861,38 @@ mod tests {
 
     fn parse(args: &[&str]) -> Result<Command, UsageError> {
         parse_args(args.iter().copied())
+    }
+
+    // `--f64` overrides a run file's `f32 = true`, `--f32` a file's default; both at
+    // once are an error.
+    #[test]
+    fn precision_over_the_file() {
+        let dir = std::env::temp_dir().join(format!("host-sim-cli-f64-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("single.toml");
+        let text = ScenarioId::FiveBar
+            .file_text()
+            .replace("f32 = false", "f32 = true");
+        assert!(text.contains("f32 = true"));
+        std::fs::write(&path, text).unwrap();
+        let file = path.to_str().unwrap();
+        let f32_of = |extra: &[&str]| match parse(&[&["run", file][..], extra].concat()) {
+            Ok(Command::Run(o)) => Ok(o.f32),
+            Ok(other) => panic!("{other:?}"),
+            Err(e) => Err(e.0),
+        };
+        assert_eq!(f32_of(&[]), Ok(true));
+        assert_eq!(f32_of(&["--f64"]), Ok(false));
+        assert_eq!(f32_of(&["--f32", "--f32"]), Ok(true));
+        assert!(f32_of(&["--f32", "--f64"])
+            .unwrap_err()
+            .contains("give one precision"));
+        let builtin = |extra: &[&str]| match parse(&[&["run", "five-bar"][..], extra].concat()) {
+            Ok(Command::Run(o)) => o.f32,
+            other => panic!("{other:?}"),
+        };
+        assert!(!builtin(&[]) && builtin(&["--f32"]) && !builtin(&["--f64"]));
+        let _ = std::fs::remove_dir_all(&dir);
     }
 
     #[test]
