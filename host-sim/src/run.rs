@@ -431,7 +431,10 @@ pub fn simulate_with<T: Real>(
     let outcome = loop {
         // Kinetostatics at the current state (the one at `steps`).
         if let Err(error) = sim.kinetostatics() {
-            break Err(Failure::Kinetostatics(error));
+            break Err(Failure::Step {
+                kinetostatics: true,
+                error,
+            });
         }
         for &k in &forces {
             let v = Layout::value(layout.columns[k], &sim).to_f64();
@@ -459,14 +462,14 @@ pub fn simulate_with<T: Real>(
         }
         let t0 = Instant::now();
         let r = match adaptive.as_mut() {
-            None => sim.step().map_err(Failure::Step),
+            None => sim.step().map_err(Failure::step),
             Some(a) => match sim.step_adaptive(a) {
                 Ok(stats) => {
                     accepted += u64::from(stats.accepted);
                     rejected += u64::from(stats.rejected);
                     Ok(())
                 }
-                Err(AdaptiveError::System(e)) => Err(Failure::Step(e)),
+                Err(AdaptiveError::System(e)) => Err(Failure::step(e)),
                 Err(e) => Err(Failure::Integrator(e.to_string())),
             },
         };
@@ -483,18 +486,13 @@ pub fn simulate_with<T: Real>(
     csv.flush().map_err(write_err)?;
     match outcome {
         Ok(()) => {}
-        Err(Failure::Step(error)) => {
+        Err(Failure::Step {
+            kinetostatics,
+            error,
+        }) => {
             return Err(RunError::Step {
                 steps,
-                kinetostatics: false,
-                rows,
-                error,
-            })
-        }
-        Err(Failure::Kinetostatics(error)) => {
-            return Err(RunError::Step {
-                steps,
-                kinetostatics: true,
+                kinetostatics,
                 rows,
                 error,
             })
@@ -536,10 +534,22 @@ pub fn simulate_with<T: Real>(
 
 /// Why the stepping loop of [`simulate_with`] stopped early.
 enum Failure {
-    /// The next step (or output interval) failed.
-    Step(StepError),
-    /// The kinetostatics at the current state failed.
-    Kinetostatics(StepError),
+    /// The next step (or output interval) failed, or the kinetostatics at the current
+    /// state did.
+    Step {
+        kinetostatics: bool,
+        error: StepError,
+    },
     /// The adaptive integrator gave up.
     Integrator(String),
+}
+
+impl Failure {
+    /// The next step's failure.
+    fn step(error: StepError) -> Self {
+        Failure::Step {
+            kinetostatics: false,
+            error,
+        }
+    }
 }

@@ -594,7 +594,10 @@ impl<T: Real> Twin<T> {
         // A step that fails near the diode's limit is the mechanism's singularity, also
         // when rounding (f32) breaks the energy balance some steps before the groups'
         // conditioning falls under SINGULAR_CONDITIONING.
-        if failure.at_singularity() || matches!(failure, TwinError::Diverged { .. }) {
+        if matches!(
+            failure,
+            TwinError::Mechanism { .. } | TwinError::Diverged { .. }
+        ) {
             if let Some(e) = self.diode_in_line() {
                 return Err(e);
             }
