@@ -183,7 +183,7 @@ pub fn generalized_accelerations<T: Real>(
 /// `VᵀMV` and `Vᵀ(F - M a_b)` for `M` coordinates (thesis eq. 4.49) into the top-left
 /// blocks of `mq` and `gf`: one pass over the live rows (3 per link), each adding its
 /// terms `m_r V_rj V_rk` (lower triangle, then mirrored) and `V_rj (F_r - m_r a_b,r)`.
-fn reduced<T: Real, const M: usize>(
+fn generalized_terms<T: Real, const M: usize>(
     model: &Model<T>,
     ws: &Workspace<T>,
     mq: &mut SMatrix<T, MAX_DOF, MAX_DOF>,
@@ -208,9 +208,9 @@ fn reduced<T: Real, const M: usize>(
                     .copied()
                     .unwrap_or(T::zero())
             });
-            for ((vj, bj), aj) in vr.iter().zip(b.iter_mut()).zip(a.iter_mut()) {
+            for (j, ((vj, bj), aj)) in vr.iter().zip(b.iter_mut()).zip(a.iter_mut()).enumerate() {
                 *bj += *vj * rhs;
-                for (vk, ajk) in vr.iter().zip(aj.iter_mut()) {
+                for (vk, ajk) in vr.iter().zip(aj.iter_mut()).take(j + 1) {
                     *ajk += mr * *vj * *vk;
                 }
             }
@@ -246,9 +246,9 @@ pub fn solve_accelerations<T: Real>(
     let mut gf = SVector::<T, MAX_DOF>::zeros();
     match m {
         0 => {}
-        1 => reduced::<T, 1>(model, ws, &mut mq, &mut gf),
-        2 => reduced::<T, 2>(model, ws, &mut mq, &mut gf),
-        _ => reduced::<T, MAX_DOF>(model, ws, &mut mq, &mut gf),
+        1 => generalized_terms::<T, 1>(model, ws, &mut mq, &mut gf),
+        2 => generalized_terms::<T, 2>(model, ws, &mut mq, &mut gf),
+        _ => generalized_terms::<T, MAX_DOF>(model, ws, &mut mq, &mut gf),
     }
     ws.mass_q = mq;
     ws.gen_force = gf;
