@@ -12,7 +12,7 @@ use crate::model::Model;
 use crate::scalar::{cross, perp, rotate_cs, Real, Vec2};
 use crate::structomat::JointKind;
 use crate::transmission::evaluate;
-use crate::workspace::Workspace;
+use crate::workspace::{BodyState, Workspace};
 use nalgebra::{Cholesky, SMatrix, SVector};
 
 /// Kinetic and potential energy, J.
@@ -25,29 +25,25 @@ pub struct Energy<T> {
 }
 
 /// Adds a force `f` (N, world) applied at world point `at` and a moment (N·m) to the
-/// loads of link `body` (reduced to its COG).
+/// loads of link `body` (reduced to its COG at the poses `bodies`).
 pub(crate) fn add_load<T: Real>(
     model: &Model<T>,
-    ws: &Workspace<T>,
+    bodies: &[BodyState<T>],
     loads: &mut SVector<T, POSE_ROWS>,
     body: u8,
     at: Vec2<T>,
     f: Vec2<T>,
     moment: T,
 ) {
-    if body == 0 {
+    let (Some(l), Some(b)) = (model.link(body), bodies.get(body as usize)) else {
         return;
-    }
-    let g = ws.cog(model, body);
-    let r = 3 * (body as usize - 1);
-    for (row, val) in [
-        (r, f.x),
-        (r + 1, f.y),
-        (r + 2, moment + cross(&(at - g), &f)),
-    ] {
-        if let Some(e) = loads.get_mut(row) {
-            *e += val;
-        }
+    };
+    let g = b.o + rotate_cs(b.c, b.s, &l.cog);
+    let r = 3 * (body as usize).saturating_sub(1);
+    if let Some([fx, fy, m]) = loads.as_mut_slice().get_mut(r..r + 3) {
+        *fx += f.x;
+        *fy += f.y;
+        *m += moment + cross(&(at - g), &f);
     }
 }
 
@@ -59,21 +55,6 @@ pub fn applied_forces<T: Real>(
     ws: &mut Workspace<T>,
     t: T,
 ) -> Result<(), StepError> {
-    // Built in place over the live rows (rows past the links stay zero).
-    let mut f = core::mem::replace(&mut ws.force, SVector::zeros());
-    let g = model.gravity();
-    for (i, l) in model.links().iter().enumerate() {
-        for (row, val) in [
-            (3 * i, l.mass * g.x),
-            (3 * i + 1, l.mass * g.y),
-            (3 * i + 2, T::zero()),
-        ] {
-            if let Some(e) = f.get_mut(row) {
-                *e = val;
-            }
-        }
-    }
-    add_external_loads(model, ws, &mut f);
     for (d, slot) in model.drives().iter().zip(ws.motor.iter_mut()) {
         let j = d.coord as usize;
         let (q, qd) = (
@@ -89,72 +70,82 @@ pub fn applied_forces<T: Real>(
         }
         *slot = tau;
     }
-    for (d, tau) in model.drives().iter().zip(ws.motor) {
+    // Built in place: the live rows of the links, zeros past them.
+    let Workspace {
+        body,
+        force: f,
+        applied_moment,
+        motor,
+        ..
+    } = ws;
+    f.fill(T::zero());
+    let g = model.gravity();
+    for (l, rows) in model
+        .links()
+        .iter()
+        .zip(f.as_mut_slice().chunks_exact_mut(3))
+    {
+        if let [fx, fy, _] = rows {
+            *fx = l.mass * g.x;
+            *fy = l.mass * g.y;
+        }
+    }
+    add_external_loads(model, body, applied_moment, f);
+    for (d, tau) in model.drives().iter().zip(motor.iter()) {
         let Some(grp) = model.groups().get(d.group as usize) else {
             continue;
         };
         for jt in grp.joints.iter() {
-            let bi = ws.body.get(jt.i as usize).copied().unwrap_or_default();
-            let bj = ws.body.get(jt.j as usize).copied().unwrap_or_default();
+            let bi = body.get(jt.i as usize).copied().unwrap_or_default();
+            let bj = body.get(jt.j as usize).copied().unwrap_or_default();
             let at = bi.o + rotate_cs(bi.c, bi.s, &jt.pi);
-            match jt.kind {
-                JointKind::DriveTorque => {
-                    add_load(model, ws, &mut f, jt.i, at, Vec2::zeros(), tau);
-                    add_load(model, ws, &mut f, jt.j, at, Vec2::zeros(), -tau);
-                }
-                JointKind::DriveForce { dir } => {
-                    let u = rotate_cs(bj.c, bj.s, &dir) * tau;
-                    add_load(model, ws, &mut f, jt.i, at, u, T::zero());
-                    add_load(model, ws, &mut f, jt.j, at, -u, T::zero());
-                }
-                _ => {}
-            }
+            let (u, m) = match jt.kind {
+                JointKind::DriveTorque => (Vec2::zeros(), *tau),
+                JointKind::DriveForce { dir } => (rotate_cs(bj.c, bj.s, &dir) * *tau, T::zero()),
+                _ => continue,
+            };
+            add_load(model, body, f, jt.i, at, u, m);
+            add_load(model, body, f, jt.j, at, -u, -m);
         }
     }
-    ws.force = f;
     Ok(())
 }
 
-/// Adds the model's constant loads and the workspace's caller-set moments
-/// (`ws.applied_moment`) to `f` (shared by the equations of motion and the
+/// Adds the model's constant loads and the caller-set moments (`applied_moment`, per
+/// body) to `f`, at the poses `bodies` (shared by the equations of motion and the
 /// kinetostatics).
 pub(crate) fn add_external_loads<T: Real>(
     model: &Model<T>,
-    ws: &Workspace<T>,
+    bodies: &[BodyState<T>],
+    applied_moment: &[T],
     f: &mut SVector<T, POSE_ROWS>,
 ) {
     for ld in model.loads() {
-        let b = ws.body.get(ld.body as usize).copied().unwrap_or_default();
+        let b = bodies.get(ld.body as usize).copied().unwrap_or_default();
         let at = b.o + rotate_cs(b.c, b.s, &ld.point);
-        add_load(model, ws, f, ld.body, at, ld.force, ld.moment);
+        add_load(model, bodies, f, ld.body, at, ld.force, ld.moment);
     }
-    for (i, m) in ws
-        .applied_moment
-        .iter()
-        .enumerate()
-        .skip(1)
-        .take(model.n_links())
-    {
-        if let Some(e) = f.get_mut(3 * (i - 1) + 2) {
-            *e += *m;
-        }
+    let moments = f.as_mut_slice().iter_mut().skip(2).step_by(3);
+    for (e, m) in moments.zip(applied_moment.iter().skip(1).take(model.n_links())) {
+        *e += *m;
     }
 }
 
-/// `M·v` for a pose-space vector (`m` on the two translations, `I_G` on the rotation).
-pub(crate) fn mass_times<T: Real>(
-    model: &Model<T>,
-    v: &SVector<T, POSE_ROWS>,
-) -> SVector<T, POSE_ROWS> {
-    let mut out = SVector::<T, POSE_ROWS>::zeros();
-    for (i, l) in model.links().iter().enumerate() {
-        for (k, m) in [(3 * i, l.mass), (3 * i + 1, l.mass), (3 * i + 2, l.inertia)] {
-            if let (Some(o), Some(x)) = (out.get_mut(k), v.get(k)) {
-                *o = m * *x;
+/// The actual pose-space accelerations `a_G = a_b + V q̈` of link `body` (its COG's
+/// acceleration and its angular acceleration) at the workspace's `q̈`.
+pub(crate) fn link_acceleration<T: Real>(ws: &Workspace<T>, body: u8) -> [T; 3] {
+    let r = 3 * (body as usize).saturating_sub(1);
+    let v = ws.v.as_slice();
+    let ab = ws.a_bias.as_slice();
+    core::array::from_fn(|c| {
+        let mut vq = T::zero();
+        for (j, q) in ws.qdd.iter().enumerate() {
+            if let Some(v) = v.get(j * POSE_ROWS + r + c) {
+                vq += *v * *q;
             }
         }
-    }
-    out
+        ab.get(r + c).copied().unwrap_or(T::zero()) + vq
+    })
 }
 
 /// Forward dynamics at `(t, q, q̇)`: kinematics, `V`, `a_b`, `F`, `VᵀMV`, `q̈`. Leaves
@@ -189,6 +180,56 @@ pub fn generalized_accelerations<T: Real>(
     solve_accelerations(model, ws, t)
 }
 
+/// `VᵀMV` and `Vᵀ(F - M a_b)` for `M` coordinates (thesis eq. 4.49) into the top-left
+/// blocks of `mq` and `gf`: one pass over the live rows (3 per link), each adding its
+/// terms `m_r V_rj V_rk` (lower triangle, then mirrored) and `V_rj (F_r - m_r a_b,r)`.
+fn generalized_terms<T: Real, const M: usize>(
+    model: &Model<T>,
+    ws: &Workspace<T>,
+    mq: &mut SMatrix<T, MAX_DOF, MAX_DOF>,
+    gf: &mut SVector<T, MAX_DOF>,
+) {
+    let v = ws.v.as_slice();
+    let cols: [&[T]; M] =
+        core::array::from_fn(|j| v.get(j * POSE_ROWS..(j + 1) * POSE_ROWS).unwrap_or(&[]));
+    let (force, bias) = (ws.force.as_slice(), ws.a_bias.as_slice());
+    let mut a = [[T::zero(); M]; M];
+    let mut b = [T::zero(); M];
+    for (i, l) in model.links().iter().enumerate() {
+        for (c, mr) in [l.mass, l.mass, l.inertia].into_iter().enumerate() {
+            let r = 3 * i + c;
+            let (Some(f), Some(ab)) = (force.get(r), bias.get(r)) else {
+                continue;
+            };
+            let rhs = *f - mr * *ab;
+            let vr: [T; M] = core::array::from_fn(|j| {
+                cols.get(j)
+                    .and_then(|c| c.get(r))
+                    .copied()
+                    .unwrap_or(T::zero())
+            });
+            for (j, ((vj, bj), aj)) in vr.iter().zip(b.iter_mut()).zip(a.iter_mut()).enumerate() {
+                *bj += *vj * rhs;
+                for (vk, ajk) in vr.iter().zip(aj.iter_mut()).take(j + 1) {
+                    *ajk += mr * *vj * *vk;
+                }
+            }
+        }
+    }
+    for (j, (aj, bj)) in a.iter().zip(b).enumerate() {
+        if let Some(g) = gf.get_mut(j) {
+            *g = bj;
+        }
+        for (k, e) in aj.iter().enumerate().take(j + 1) {
+            for at in [(j, k), (k, j)] {
+                if let Some(m) = mq.get_mut(at) {
+                    *m = *e;
+                }
+            }
+        }
+    }
+}
+
 /// The second half of [`generalized_accelerations`]: applied loads, `VᵀMV`,
 /// `Vᵀ(F - M a_b)` and `q̈`, at the kinematics the workspace already holds (from
 /// [`evaluate`]). Lets a caller set loads that depend on the evaluated motion (a motor
@@ -201,44 +242,13 @@ pub fn solve_accelerations<T: Real>(
     let time = t.to_f64();
     applied_forces(model, ws, t)?;
     let m = model.dof().min(MAX_DOF);
-    let rows = 3 * model.n_links();
-    // Live rows of F - M a_b and of the mass diagonal, then of each column of V, as
-    // plain slices (no 2-D indexing in the inner products).
-    let mut rhs = [T::zero(); POSE_ROWS];
-    let mut mass = [T::zero(); POSE_ROWS];
-    for (i, l) in model.links().iter().enumerate() {
-        for (c, mi) in [l.mass, l.mass, l.inertia].into_iter().enumerate() {
-            let row = 3 * i + c;
-            if let (Some(r), Some(mm), Some(&f), Some(&ab)) = (
-                rhs.get_mut(row),
-                mass.get_mut(row),
-                ws.force.get(row),
-                ws.a_bias.get(row),
-            ) {
-                *r = f - mi * ab;
-                *mm = mi;
-            }
-        }
-    }
-    let v = ws.v.as_slice();
-    let col = |j: usize| v.get(j * POSE_ROWS..j * POSE_ROWS + rows).unwrap_or(&[]);
     let mut mq = SMatrix::<T, MAX_DOF, MAX_DOF>::identity();
     let mut gf = SVector::<T, MAX_DOF>::zeros();
-    for j in 0..m {
-        let vj = col(j);
-        gf[j] = vj
-            .iter()
-            .zip(rhs.iter())
-            .fold(T::zero(), |s, (a, b)| s + *a * *b);
-        for k in 0..=j {
-            let e = vj
-                .iter()
-                .zip(col(k).iter())
-                .zip(mass.iter())
-                .fold(T::zero(), |s, ((a, b), w)| s + *w * *a * *b);
-            mq[(j, k)] = e;
-            mq[(k, j)] = e;
-        }
+    match m {
+        0 => {}
+        1 => generalized_terms::<T, 1>(model, ws, &mut mq, &mut gf),
+        2 => generalized_terms::<T, 2>(model, ws, &mut mq, &mut gf),
+        _ => generalized_terms::<T, MAX_DOF>(model, ws, &mut mq, &mut gf),
     }
     ws.mass_q = mq;
     ws.gen_force = gf;
@@ -295,25 +305,20 @@ pub fn solve_accelerations<T: Real>(
 /// With `q̈` known: actual COG and origin accelerations of every body
 /// (`a_G = a_b + V q̈`) and every group's `ẍ = ẍ_b + C q̈`.
 pub fn finish_accelerations<T: Real>(model: &Model<T>, ws: &mut Workspace<T>) {
-    let qdd = SVector::<T, MAX_DOF>::from_column_slice(&ws.qdd);
-    let a = ws.a_bias + ws.v * qdd;
     for (i, l) in model.links().iter().enumerate() {
+        let [ax, ay, al] = link_acceleration(ws, i as u8 + 1);
         let Some(b) = ws.body.get_mut(i + 1) else {
             continue;
         };
         let r = rotate_cs(b.c, b.s, &l.cog);
-        let (Some(&ax), Some(&ay), Some(&al)) = (a.get(3 * i), a.get(3 * i + 1), a.get(3 * i + 2))
-        else {
-            continue;
-        };
         b.alpha = al;
         b.a = Vec2::new(ax, ay) - perp(&r) * al + r * (b.omega * b.omega);
     }
+    let qdd = SVector::<T, MAX_DOF>::from_column_slice(&ws.qdd);
     for gd in ws.group.iter_mut().take(model.groups().len()) {
         let x = gd.dx_dq * qdd;
-        for (k, o) in gd.xdd.iter_mut().enumerate() {
-            *o = gd.xdd_bias.get(k).copied().unwrap_or(T::zero())
-                + x.get(k).copied().unwrap_or(T::zero());
+        for ((o, b), x) in gd.xdd.iter_mut().zip(gd.xdd_bias).zip(x.iter()) {
+            *o = b + *x;
         }
     }
 }

@@ -7,96 +7,345 @@
 //!
 //! Applied motor torques are *not* among the loads: the driving torques are unknowns,
 //! so that in a forward-dynamics run they must come out equal to the applied ones.
+//!
+//! The equilibrium of a group is solved by its structure:
+//! - a motor element (one link, 3 unknowns) by Cramer's rule;
+//! - a dyad (two links, each with one outer joint, and the middle joint between them,
+//!   2 unknowns each) in closed form: each link's moment equation about its outer joint
+//!   gives the middle joint's reaction (a 2 × 2 system), then each link's remaining
+//!   equations its outer joint's;
+//! - any other group (the triad, a six-link Assur group) as one dense system.
 
-use crate::config::{MAX_BODIES, MAX_GROUP_LINKS, POSE_ROWS};
-use crate::dynamics::{add_external_loads, add_load, mass_times};
+use crate::config::{MAX_GROUP_JOINTS, MAX_GROUP_LINKS, POSE_ROWS};
+use crate::dynamics::{add_external_loads, add_load, link_acceleration};
 use crate::error::{GroupFault, StepError};
 use crate::kinematics::group_id;
 use crate::model::Model;
 use crate::scalar::{cross, perp, rotate_cs, Real, Vec2};
-use crate::structomat::{Group, JointKind};
+use crate::structomat::{Group, Joint, JointKind};
 use crate::workspace::{Reaction, Workspace};
-use nalgebra::{SMatrix, SVector};
+use nalgebra::{SMatrix, SVector, Vector3};
 
 /// Loads on each body without the motors: gravity, constant and caller-set loads, and
-/// inertia.
+/// inertia (`F - M a_G`, live rows only).
 fn free_body_loads<T: Real>(model: &Model<T>, ws: &Workspace<T>) -> SVector<T, POSE_ROWS> {
     let mut f = SVector::<T, POSE_ROWS>::zeros();
     let g = model.gravity();
-    for (i, l) in model.links().iter().enumerate() {
-        if let Some(e) = f.get_mut(3 * i) {
-            *e = l.mass * g.x;
-        }
-        if let Some(e) = f.get_mut(3 * i + 1) {
-            *e = l.mass * g.y;
+    for (l, rows) in model
+        .links()
+        .iter()
+        .zip(f.as_mut_slice().chunks_exact_mut(3))
+    {
+        if let [fx, fy, _] = rows {
+            *fx = l.mass * g.x;
+            *fy = l.mass * g.y;
         }
     }
-    add_external_loads(model, ws, &mut f);
-    let qdd = SVector::from_column_slice(&ws.qdd);
-    let acc = ws.a_bias + ws.v * qdd;
-    f - mass_times(model, &acc)
+    add_external_loads(model, &ws.body, &ws.applied_moment, &mut f);
+    for (i, (l, rows)) in model
+        .links()
+        .iter()
+        .zip(f.as_mut_slice().chunks_exact_mut(3))
+        .enumerate()
+    {
+        let acc = link_acceleration(ws, i as u8 + 1);
+        for ((e, m), a) in rows.iter_mut().zip([l.mass, l.mass, l.inertia]).zip(acc) {
+            *e -= m * a;
+        }
+    }
+    f
 }
 
-/// The unit reaction directions of a joint on body `i` (force, at world point `at`)
-/// and the moments they make about `i`'s COG; one entry per unknown.
-fn unit_reactions<T: Real>(kind: JointKind<T>, u_world: Vec2<T>) -> ([(Vec2<T>, T); 2], usize) {
-    let x = Vec2::new(T::one(), T::zero());
-    let y = Vec2::new(T::zero(), T::one());
-    let z = Vec2::zeros();
-    match kind {
-        JointKind::Revolute => ([(x, T::zero()), (y, T::zero())], 2),
-        JointKind::Prismatic { .. } => ([(perp(&u_world), T::zero()), (z, T::one())], 2),
-        JointKind::DriveTorque => ([(z, T::one()), (z, T::zero())], 1),
-        JointKind::DriveForce { .. } => ([(u_world, T::zero()), (z, T::zero())], 1),
-    }
+/// A joint's reaction unknowns at the workspace's pose: where it acts and, per unknown,
+/// the unit force (world) and moment it stands for. The reaction on `i` (from `j`) is
+/// `Σ_k λ_k units_k`, the one on `j` its opposite.
+#[derive(Clone, Copy)]
+struct Unknowns<T: Real> {
+    /// The joint point, world.
+    at: Vec2<T>,
+    /// Unit force and moment of each unknown (the first `n` are used).
+    units: [(Vec2<T>, T); 2],
+    /// Number of unknowns (1 or 2).
+    n: usize,
 }
 
-/// Solves one group's equilibrium `A λ = b` (size `N = 3 × links`, padded with identity).
-fn solve_group<T: Real, const N: usize>(
-    model: &Model<T>,
-    ws: &Workspace<T>,
-    g: &Group<T>,
-    loads: &SVector<T, POSE_ROWS>,
-) -> Option<SVector<T, N>> {
-    let mut a = SMatrix::<T, N, N>::identity();
-    let mut b = SVector::<T, N>::zeros();
-    let row_of = |body: u8| {
-        g.placements
-            .iter()
-            .position(|p| p.link == body)
-            .map(|k| 3 * k)
-    };
-    for (k, p) in g.placements.iter().enumerate() {
-        let r = 3 * (p.link as usize).checked_sub(1)?;
-        for c in 0..3 {
-            *b.get_mut(3 * k + c)? = -*loads.get(r + c)?;
-            *a.get_mut((3 * k + c, 3 * k + c))? = T::zero();
-        }
-    }
-    let mut col = 0;
-    for jt in g.joints.iter() {
-        let bi = ws.body.get(jt.i as usize)?;
-        let bj = ws.body.get(jt.j as usize)?;
+impl<T: Real> Unknowns<T> {
+    /// The unknowns of joint `jt`: a revolute's force `(F_x, F_y)`; a prismatic's force
+    /// normal to the guide and moment; a driver's torque, or force along its guide.
+    fn of(ws: &Workspace<T>, jt: &Joint<T>) -> Self {
+        let bi = ws.body.get(jt.i as usize).copied().unwrap_or_default();
+        let bj = ws.body.get(jt.j as usize).copied().unwrap_or_default();
         let at = bi.o + rotate_cs(bi.c, bi.s, &jt.pi);
-        let u = match jt.kind {
-            JointKind::Prismatic { dir } | JointKind::DriveForce { dir } => {
-                rotate_cs(bj.c, bj.s, &dir)
+        let x = Vec2::new(T::one(), T::zero());
+        let y = Vec2::new(T::zero(), T::one());
+        let z = Vec2::zeros();
+        let (units, n) = match jt.kind {
+            JointKind::Revolute => ([(x, T::zero()), (y, T::zero())], 2),
+            JointKind::Prismatic { dir } => {
+                let u = rotate_cs(bj.c, bj.s, &dir);
+                ([(perp(&u), T::zero()), (z, T::one())], 2)
             }
-            _ => Vec2::zeros(),
+            JointKind::DriveTorque => ([(z, T::one()), (z, T::zero())], 1),
+            JointKind::DriveForce { dir } => {
+                let u = rotate_cs(bj.c, bj.s, &dir);
+                ([(u, T::zero()), (z, T::zero())], 1)
+            }
         };
-        let (units, n) = unit_reactions(jt.kind, u);
-        for (force, moment) in units.iter().take(n) {
-            for (body, sign) in [(jt.i, T::one()), (jt.j, -T::one())] {
-                let Some(r) = row_of(body) else { continue };
-                let m = *moment + cross(&(at - ws.cog(model, body)), force);
-                *a.get_mut((r, col))? += sign * force.x;
-                *a.get_mut((r + 1, col))? += sign * force.y;
-                *a.get_mut((r + 2, col))? += sign * m;
-            }
-            col += 1;
+        Self { at, units, n }
+    }
+
+    /// The wrench `(F_x, F_y, M_G)` of each unit on a body whose COG is at `cog` (the
+    /// force at the joint reduced to the COG): the columns of its equilibrium.
+    fn wrenches(&self, cog: Vec2<T>) -> [Vector3<T>; 2] {
+        self.units
+            .map(|(f, m)| Vector3::new(f.x, f.y, m + cross(&(self.at - cog), &f)))
+    }
+
+    /// The reaction of unknowns `lam` (on `i`, from `j`).
+    fn reaction(&self, lam: &[T]) -> Reaction<T> {
+        let mut r = Reaction::default();
+        for ((f, m), l) in self.units.iter().take(self.n).zip(lam) {
+            r.force += *f * *l;
+            r.moment += *m * *l;
+        }
+        r
+    }
+}
+
+/// One group's equilibrium: per link (by placement) its COG and loads, per joint (in
+/// the group's order) its unknowns, and the solution `λ` (a joint's unknowns
+/// consecutive). One is set up and solved per group, reusing the buffers.
+struct Equilibrium<T: Real> {
+    cog: [Vec2<T>; MAX_GROUP_LINKS],
+    load: [Vector3<T>; MAX_GROUP_LINKS],
+    joints: [Unknowns<T>; MAX_GROUP_JOINTS],
+    lam: [T; GROUP_ROWS],
+}
+
+impl<T: Real> Equilibrium<T> {
+    fn new() -> Self {
+        let none = Unknowns {
+            at: Vec2::zeros(),
+            units: [(Vec2::zeros(), T::zero()); 2],
+            n: 0,
+        };
+        Self {
+            cog: [Vec2::zeros(); MAX_GROUP_LINKS],
+            load: [Vector3::zeros(); MAX_GROUP_LINKS],
+            joints: [none; MAX_GROUP_JOINTS],
+            lam: [T::zero(); GROUP_ROWS],
         }
     }
-    crate::linalg::solve(a, b)
+
+    /// Sets up group `g`'s equilibrium at the workspace's pose under `loads`.
+    fn set(
+        &mut self,
+        model: &Model<T>,
+        ws: &Workspace<T>,
+        g: &Group<T>,
+        loads: &SVector<T, POSE_ROWS>,
+    ) {
+        for ((p, c), l) in g.placements.iter().zip(&mut self.cog).zip(&mut self.load) {
+            *c = ws.cog(model, p.link);
+            let r = 3 * (p.link as usize).saturating_sub(1);
+            if let Some([fx, fy, m]) = loads.as_slice().get(r..r + 3) {
+                *l = Vector3::new(*fx, *fy, *m);
+            }
+        }
+        for (k, u) in self.joints.iter_mut().enumerate() {
+            match g.joints.get(k) {
+                Some(jt) => *u = Unknowns::of(ws, jt),
+                None => u.n = 0,
+            }
+        }
+        self.lam = [T::zero(); GROUP_ROWS];
+    }
+
+    /// Solves for `λ` by the group's structure (see the module docs); `false` when the
+    /// dense system is singular (the closed forms leave non-finite values instead).
+    fn solve(&mut self, g: &Group<T>) -> bool {
+        let links = g.placements.len();
+        let unknowns: usize = self.joints.iter().map(|u| u.n).sum();
+        let closed = match (links, unknowns) {
+            (1, 3) => self.single_link(g),
+            (2, 6) => self.dyad(g),
+            _ => false,
+        };
+        closed
+            || match links {
+                0..=2 => self.dense::<6>(g),
+                3..=4 => self.dense::<12>(g),
+                _ => self.dense::<GROUP_ROWS>(g),
+            }
+    }
+
+    /// A one-link group with 3 unknowns (a motor element R or T): its 3 equations
+    /// `Σ_k λ_k w_k = -L` by Cramer's rule. `false` if a joint does not join the link
+    /// to an earlier body.
+    fn single_link(&mut self, g: &Group<T>) -> bool {
+        let Some(link) = g.placements.first().map(|p| p.link) else {
+            return false;
+        };
+        let mut cols = [Vector3::zeros(); 3];
+        let mut slots = cols.iter_mut();
+        for (jt, u) in g.joints.iter().zip(&self.joints) {
+            if jt.i != link || jt.j == link {
+                return false;
+            }
+            for (w, slot) in u.wrenches(self.cog[0]).iter().take(u.n).zip(&mut slots) {
+                *slot = *w;
+            }
+        }
+        let x = cramer(&cols, &-self.load[0]);
+        for (o, v) in self.lam.iter_mut().zip(x) {
+            *o = v;
+        }
+        true
+    }
+
+    /// A dyad: links `a`, `b`, an outer joint on each (to earlier bodies) and the
+    /// middle joint between them, 2 unknowns each. With `W_a` the outer joint's two
+    /// wrench columns on `a` and `n_a = w_a1 × w_a2` (the equilibrium row that does not
+    /// see them: for a revolute, the moment about the joint; for a prismatic, the
+    /// force along the guide), `n_aᵀ (M_a λ_m) = -n_aᵀ L_a` and the same for `b` give
+    /// the middle joint's `λ_m` (2 × 2); then `W_a λ_a = -L_a - M_a λ_m`. `false` if
+    /// the joints are not of this shape.
+    fn dyad(&mut self, g: &Group<T>) -> bool {
+        let (Some(a), Some(b)) = (g.placements.first(), g.placements.get(1)) else {
+            return false;
+        };
+        let (a, b) = (a.link, b.link);
+        // Joint index of the outer joint on a, on b, and of the middle joint.
+        let (mut outer_a, mut outer_b, mut middle) = (None, None, None);
+        for (k, jt) in g.joints.iter().enumerate() {
+            let slot = match (jt.i, jt.j) {
+                (i, j) if (i, j) == (a, b) || (i, j) == (b, a) => &mut middle,
+                (i, j) if i == a && j != a => &mut outer_a,
+                (i, j) if i == b && j != b => &mut outer_b,
+                _ => return false,
+            };
+            if slot.replace(k).is_some() {
+                return false;
+            }
+        }
+        let (Some(oa), Some(ob), Some(m)) = (outer_a, outer_b, middle) else {
+            return false;
+        };
+        let (Some(ua), Some(ub), Some(um), Some(jm)) = (
+            self.joints.get(oa),
+            self.joints.get(ob),
+            self.joints.get(m),
+            g.joints.get(m),
+        ) else {
+            return false;
+        };
+        // The middle joint's reaction acts on its `i` and, opposite, on the other link.
+        let sign_a = if jm.i == a { T::one() } else { -T::one() };
+        let [ca, cb] = [self.cog[0], self.cog[1]];
+        let [la, lb] = [self.load[0], self.load[1]];
+        let wa = ua.wrenches(ca);
+        let wb = ub.wrenches(cb);
+        let ma = um.wrenches(ca).map(|w| w * sign_a);
+        let mb = um.wrenches(cb).map(|w| -w * sign_a);
+        let na = wa[0].cross(&wa[1]);
+        let nb = wb[0].cross(&wb[1]);
+        let lm = solve2(
+            [
+                [na.dot(&ma[0]), na.dot(&ma[1])],
+                [nb.dot(&mb[0]), nb.dot(&mb[1])],
+            ],
+            [-na.dot(&la), -nb.dot(&lb)],
+        );
+        // The outer joints: `W λ = r` is consistent, `n` completes `W`'s columns to a
+        // basis (its coefficient comes out zero to rounding).
+        let outer = |w: &[Vector3<T>; 2], n: Vector3<T>, mm: &[Vector3<T>; 2], l: Vector3<T>| {
+            let r = -l - mm[0] * lm[0] - mm[1] * lm[1];
+            let [x, y, _] = cramer(&[w[0], w[1], n], &r);
+            [x, y]
+        };
+        for (k, x) in [
+            (oa, outer(&wa, na, &ma, la)),
+            (ob, outer(&wb, nb, &mb, lb)),
+            (m, lm),
+        ] {
+            for (o, v) in self.lam.iter_mut().skip(2 * k).zip(x) {
+                *o = v;
+            }
+        }
+        true
+    }
+
+    /// Any group: its equilibrium `A λ = b` as one dense system (size `N = 3 × links`,
+    /// padded with identity), by Gaussian elimination with partial pivoting; `false`
+    /// if it is singular.
+    fn dense<const N: usize>(&mut self, g: &Group<T>) -> bool {
+        let mut a = SMatrix::<T, N, N>::identity();
+        let mut b = SVector::<T, N>::zeros();
+        for (k, l) in self.load.iter().take(g.placements.len()).enumerate() {
+            for (c, lc) in l.iter().enumerate() {
+                if let (Some(bc), Some(ac)) =
+                    (b.get_mut(3 * k + c), a.get_mut((3 * k + c, 3 * k + c)))
+                {
+                    *bc = -*lc;
+                    *ac = T::zero();
+                }
+            }
+        }
+        let mut col = 0;
+        for (jt, u) in g.joints.iter().zip(&self.joints) {
+            for (body, sign) in [(jt.i, T::one()), (jt.j, -T::one())] {
+                let Some((k, cog)) = link_index(g, body).and_then(|k| Some((k, *self.cog.get(k)?)))
+                else {
+                    continue;
+                };
+                // Column `col + c` of the link's three equations (rows 3k..3k+3).
+                for (c, w) in u.wrenches(cog).iter().take(u.n).enumerate() {
+                    for (r, v) in w.iter().enumerate() {
+                        if let Some(e) = a.get_mut((3 * k + r, col + c)) {
+                            *e += sign * *v;
+                        }
+                    }
+                }
+            }
+            col += u.n;
+        }
+        let Some(x) = crate::linalg::solve(a, b) else {
+            return false;
+        };
+        for (o, v) in self.lam.iter_mut().zip(x.iter()) {
+            *o = *v;
+        }
+        true
+    }
+}
+
+/// The placement index of `body` in group `g`, if it is one of its links.
+fn link_index<T: Real>(g: &Group<T>, body: u8) -> Option<usize> {
+    g.placements.iter().position(|p| p.link == body)
+}
+
+/// `x` with `Σ_k x_k c_k = r` by Cramer's rule (`det = c_0 · (c_1 × c_2)`); non-finite
+/// when the columns are dependent.
+fn cramer<T: Real>(c: &[Vector3<T>; 3], r: &Vector3<T>) -> [T; 3] {
+    let [c0, c1, c2] = c;
+    let c12 = c1.cross(c2);
+    let det = c0.dot(&c12);
+    [
+        r.dot(&c12) / det,
+        c0.dot(&r.cross(c2)) / det,
+        c0.dot(&c1.cross(r)) / det,
+    ]
+}
+
+/// `x` with `A x = r` for a 2 × 2 `A` (rows) by Cramer's rule; non-finite when `A` is
+/// singular.
+fn solve2<T: Real>(a: [[T; 2]; 2], r: [T; 2]) -> [T; 2] {
+    let [[a00, a01], [a10, a11]] = a;
+    let det = a00 * a11 - a01 * a10;
+    [
+        (r[0] * a11 - a01 * r[1]) / det,
+        (a00 * r[1] - a10 * r[0]) / det,
+    ]
 }
 
 /// Joint reactions of every group and the driving torques of the motor elements at the
@@ -109,41 +358,26 @@ pub fn reactions<T: Real>(
     time: f64,
 ) -> Result<(), StepError> {
     let mut loads = free_body_loads(model, ws);
+    let mut eq = Equilibrium::new();
     for (gi, g) in model.groups().iter().enumerate().rev() {
-        // Sized to the group: 6 unknowns for a dyad, 12 for a triad, 18 for a
-        // six-link Assur group (3 equations per link).
-        let sol: Option<[T; GROUP_ROWS]> = match g.placements.len() {
-            0..=2 => solve_group::<T, 6>(model, ws, g, &loads).map(|s| pad(s.as_slice())),
-            3..=4 => solve_group::<T, 12>(model, ws, g, &loads).map(|s| pad(s.as_slice())),
-            _ => solve_group::<T, GROUP_ROWS>(model, ws, g, &loads).map(|s| pad(s.as_slice())),
-        };
-        let Some(lam) = sol.filter(|l| l.iter().all(|v| v.finite())) else {
+        eq.set(model, ws, g, &loads);
+        if !(eq.solve(g) && eq.lam.iter().all(|v| v.finite())) {
             return Err(StepError::Group {
                 time,
                 group: group_id(g, gi),
                 fault: GroupFault::Singular { conditioning: 0.0 },
             });
-        };
+        }
         let mut col = 0;
-        for (k, jt) in g.joints.iter().enumerate() {
-            let bi = ws.body.get(jt.i as usize).copied().unwrap_or_default();
-            let bj = ws.body.get(jt.j as usize).copied().unwrap_or_default();
-            let at = bi.o + rotate_cs(bi.c, bi.s, &jt.pi);
-            let l0 = lam.get(col).copied().unwrap_or(T::zero());
-            let l1 = lam.get(col + 1).copied().unwrap_or(T::zero());
-            let (force, moment) = match jt.kind {
-                JointKind::Revolute => (Vec2::new(l0, l1), T::zero()),
-                JointKind::Prismatic { dir } => (perp(&rotate_cs(bj.c, bj.s, &dir)) * l0, l1),
-                JointKind::DriveTorque => (Vec2::zeros(), l0),
-                JointKind::DriveForce { dir } => (rotate_cs(bj.c, bj.s, &dir) * l0, T::zero()),
-            };
-            col += jt.kind.unknowns();
-            if let Some(slot) = ws.reactions.get_mut(gi).and_then(|r| r.get_mut(k)) {
-                *slot = Reaction { force, moment };
+        for (k, (jt, u)) in g.joints.iter().zip(&eq.joints).enumerate() {
+            let r = u.reaction(eq.lam.get(col..).unwrap_or(&[]));
+            col += u.n;
+            if let Some(slot) = ws.reactions.get_mut(gi).and_then(|s| s.get_mut(k)) {
+                *slot = r;
             }
             // The reaction on the other body, if it belongs to an earlier group.
-            if !g.placements.iter().any(|p| p.link == jt.j) && (jt.j as usize) < MAX_BODIES {
-                add_load(model, ws, &mut loads, jt.j, at, -force, -moment);
+            if link_index(g, jt.j).is_none() {
+                add_load(model, &ws.body, &mut loads, jt.j, u.at, -r.force, -r.moment);
             }
         }
     }
@@ -156,14 +390,6 @@ const _: () = assert!(
     MAX_GROUP_LINKS == 6,
     "solve sizes above cover 2, 4 and 6 links"
 );
-
-fn pad<T: Real>(s: &[T]) -> [T; GROUP_ROWS] {
-    let mut out = [T::zero(); GROUP_ROWS];
-    for (o, v) in out.iter_mut().zip(s.iter()) {
-        *o = *v;
-    }
-    out
-}
 
 /// The driving torque (N·m) or force (N) that the motion requires at motor element
 /// `group`, from the last [`reactions`] call; `None` if `group` is not a motor element.

@@ -152,10 +152,11 @@ fn eval<T: Real, const N: usize, S: OdeSystem<T, N>>(
 /// allocation, no panic.
 #[derive(Clone, Debug)]
 pub struct Dp5<T: Real, const N: usize> {
-    /// The last successful step (FSAL stage, dense output).
-    last: StepData<T, N>,
-    /// Scratch for the step being computed.
-    trial: StepData<T, N>,
+    /// The last successful step (FSAL stage, dense output) and the scratch for the step
+    /// being computed; which is which is `flip` (a commit flips it instead of copying).
+    data: [StepData<T, N>; 2],
+    /// `data[1]` is the last step, `data[0]` the scratch (else the other way round).
+    flip: bool,
     /// `true` once a step has succeeded (`last` holds it).
     has_last: bool,
     /// `true` while `last.k[6]` may be reused as `f(last.t1, last.y1)`.
@@ -171,11 +172,31 @@ impl<T: Real, const N: usize> Default for Dp5<T, N> {
 }
 
 impl<T: Real, const N: usize> Dp5<T, N> {
+    /// The last successful step.
+    fn last(&self) -> &StepData<T, N> {
+        let [a, b] = &self.data;
+        if self.flip {
+            b
+        } else {
+            a
+        }
+    }
+
+    /// The step being computed.
+    fn trial(&self) -> &StepData<T, N> {
+        let [a, b] = &self.data;
+        if self.flip {
+            a
+        } else {
+            b
+        }
+    }
+
     /// A stepper with no stored stage (the first step evaluates 7 stages).
     pub fn new() -> Self {
         Self {
-            last: StepData::zeros(),
-            trial: StepData::zeros(),
+            data: [StepData::zeros(); 2],
+            flip: false,
             has_last: false,
             fsal: false,
             evaluations: 0,
@@ -200,7 +221,7 @@ impl<T: Real, const N: usize> Dp5<T, N> {
     /// `(t0, h)` of the last successful step, s; `None` before the first one.
     pub fn last_step(&self) -> Option<(T, T)> {
         if self.has_last {
-            Some((self.last.t0, self.last.h))
+            Some((self.last().t0, self.last().h))
         } else {
             None
         }
@@ -227,7 +248,7 @@ impl<T: Real, const N: usize> Dp5<T, N> {
     ) -> Result<StepReport<T>, S::Error> {
         let t1 = *t + h;
         self.attempt(sys, *t, y, h, t1)?;
-        let error = max_norm(&self.trial.err);
+        let error = max_norm(&self.trial().err);
         self.commit(t, y);
         Ok(StepReport { error })
     }
@@ -245,7 +266,9 @@ impl<T: Real, const N: usize> Dp5<T, N> {
     ) -> Result<(), S::Error> {
         let reuse = self.fsal_matches(t, y);
         let ev = &mut self.evaluations;
-        let tr = &mut self.trial;
+        // The last step (for its FSAL stage) and the scratch to fill (see `flip`).
+        let [a, b] = &mut self.data;
+        let (last, tr) = if self.flip { (&*b, a) } else { (&*a, b) };
         tr.t0 = t;
         tr.h = h;
         tr.t1 = t1;
@@ -255,7 +278,7 @@ impl<T: Real, const N: usize> Dp5<T, N> {
         let [k1, k2, k3, k4, k5, k6, k7] = &mut tr.k;
 
         if reuse {
-            *k1 = self.last.k[6];
+            *k1 = last.k[6];
         } else {
             eval(sys, ev, t, y, k1)?;
         }
@@ -280,30 +303,30 @@ impl<T: Real, const N: usize> Dp5<T, N> {
 
     /// The propagated state of the attempted (uncommitted) step.
     pub(super) fn trial_y1(&self) -> &SVector<T, N> {
-        &self.trial.y1
+        &self.trial().y1
     }
 
     /// The embedded error vector `h Σ E_i k_i` of the attempted step.
     pub(super) fn trial_err(&self) -> &SVector<T, N> {
-        &self.trial.err
+        &self.trial().err
     }
 
     /// Makes the attempted step the last step: writes its end `(t1, y1)` to `t`, `y`,
     /// and validates its `k_7` as the FSAL stage.
     pub(super) fn commit(&mut self, t: &mut T, y: &mut SVector<T, N>) {
-        core::mem::swap(&mut self.last, &mut self.trial);
+        self.flip = !self.flip;
         self.has_last = true;
         self.fsal = true;
-        *t = self.last.t1;
-        *y = self.last.y1;
+        *t = self.last().t1;
+        *y = self.last().y1;
     }
 
     /// `true` when the stored `k_7` is `f(t, y)` for this very `(t, y)`.
     fn fsal_matches(&self, t: T, y: &SVector<T, N>) -> bool {
         self.fsal
-            && same_bits(t, self.last.t1)
+            && same_bits(t, self.last().t1)
             && y.iter()
-                .zip(self.last.y1.iter())
+                .zip(self.last().y1.iter())
                 .all(|(a, b)| same_bits(*a, *b))
     }
 
@@ -314,7 +337,7 @@ impl<T: Real, const N: usize> Dp5<T, N> {
     /// `θ` is clamped to `[0, 1]` (NaN counts as 0); `θ = 0` and `θ = 1` give `y0` and
     /// `y1` bitwise. Before the first successful step, writes zeros.
     pub fn dense(&self, theta: T, out: &mut SVector<T, N>) {
-        let d = &self.last;
+        let d = self.last();
         match clamp_theta(theta) {
             Theta::Start => *out = d.y0,
             Theta::End => *out = d.y1,
@@ -337,7 +360,7 @@ impl<T: Real, const N: usize> Dp5<T, N> {
     /// per second), with the same clamping; `θ = 0` and `θ = 1` give `k_1 = f(t0, y0)` and
     /// `k_7 = f(t1, y1)` bitwise. For locating events between `t0` and `t0 + h`.
     pub fn dense_derivative(&self, theta: T, out: &mut SVector<T, N>) {
-        let d = &self.last;
+        let d = self.last();
         let [k1, .., k7] = &d.k;
         match clamp_theta(theta) {
             Theta::Start => *out = *k1,
