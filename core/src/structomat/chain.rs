@@ -329,17 +329,41 @@ fn term_unknown<T: Real>(t: &Term<T>, c: &TermCache<T>, u: &[T]) -> Vec2<T> {
     d
 }
 
-/// Loop-closure residual `start + Σ terms - end` of every closing chain (m), stacked.
+/// `start - end` of every closing chain (m): the known part of its residual, the same
+/// for every Newton-Raphson iterate.
+pub(crate) fn chain_gaps<T: Real>(
+    g: &Group<T>,
+    model: &Model<T>,
+    bodies: &[BodyState<T>],
+) -> [Vec2<T>; MAX_CHAINS] {
+    let mut gaps = [Vec2::zeros(); MAX_CHAINS];
+    for (ch, gap) in g.chains.iter().zip(gaps.iter_mut()) {
+        if let Some(end) = ch.end {
+            *gap = point_pos(model, bodies, ch.start) - point_pos(model, bodies, end);
+        }
+    }
+    gaps
+}
+
+/// Loop-closure residual `start + Σ terms - end` of every closing chain (m), stacked;
+/// `gaps` from [`chain_gaps`].
 pub(crate) fn residual<T: Real>(
     g: &Group<T>,
     gd: &GroupData<T>,
-    model: &Model<T>,
-    bodies: &[BodyState<T>],
+    gaps: &[Vec2<T>; MAX_CHAINS],
 ) -> GroupVector<T> {
     let mut f = GroupVector::zeros();
-    for (ci, (ch, row)) in g.chains.iter().zip(gd.cache.iter()).enumerate() {
-        let Some(end) = ch.end else { continue };
-        let mut r = point_pos(model, bodies, ch.start) - point_pos(model, bodies, end);
+    for (ci, ((ch, row), gap)) in g
+        .chains
+        .iter()
+        .zip(gd.cache.iter())
+        .zip(gaps.iter())
+        .enumerate()
+    {
+        if ch.end.is_none() {
+            continue;
+        }
+        let mut r = *gap;
         for (t, c) in ch.terms.iter().zip(row.iter()) {
             r += term_pos(t, c);
         }
@@ -684,24 +708,28 @@ fn linear_pass<T: Real>(
         *ur = acc;
     }
     *level.unknowns(gd) = u;
-    let mut sums: PrefixSums<T> = [[Vec2::zeros(); MAX_TERMS + 1]; MAX_CHAINS];
-    for (((ch, row), (start, kn)), s) in g
-        .chains
-        .iter()
-        .zip(gd.cache.iter())
-        .zip(starts.iter().zip(known.iter()))
-        .zip(sums.iter_mut())
-    {
-        let terms = ch
+    // Each placement's anchor: its chain's start plus its prefix of whole term
+    // derivatives (a dyad's links need 0 and 1 terms: no table of sums).
+    for p in g.placements.iter() {
+        let c = p.chain as usize;
+        let (Some(ch), Some(row), Some(start), Some(kn)) = (
+            g.chains.get(c),
+            gd.cache.get(c),
+            starts.get(c),
+            known.get(c),
+        ) else {
+            continue;
+        };
+        let mut anchor = *start;
+        for ((t, c), k) in ch
             .terms
             .iter()
             .zip(row.iter())
             .zip(kn.iter())
-            .map(|((t, c), k)| *k + term_unknown(t, c, &u));
-        prefix_sums(s, *start, terms);
-    }
-    for p in g.placements.iter() {
-        let anchor = anchor(&sums, p);
+            .take(p.prefix as usize)
+        {
+            anchor += *k + term_unknown(t, c, &u);
+        }
         let rate = level.angle(&p.angle, &u, bodies);
         if let Some(b) = bodies.get_mut(p.link as usize) {
             let r = rotate_cs(b.c, b.s, &p.local);

@@ -8,7 +8,7 @@
 //! start is first moved along the group's transmission functions ([`predict`]): from
 //! `x(q₀)` to `x(q₀) + C (q - q₀)`, whose error is second order in `q - q₀`.
 
-use super::chain::{eval_terms, jacobian, position_from_terms, residual};
+use super::chain::{chain_gaps, eval_terms, jacobian, position_from_terms, residual};
 use super::{Base, Group, GroupData, Term};
 use crate::config::{MAX_DOF, MAX_GROUP_VARS, NEWTON_MAX_ITER};
 use crate::error::GroupFault;
@@ -88,6 +88,8 @@ fn solve_n<T: Real, const N: usize>(
     // the accuracy of a converged Newton step (far below the tolerance), not the
     // predictor's.
     let predicted = predict(gd, n, q);
+    // The chains' ends are known points: placed before the group, fixed while it solves.
+    let gaps = chain_gaps(g, model, bodies);
     for it in 0..NEWTON_MAX_ITER {
         for (k, (x, cs)) in gd.x.iter().zip(gd.trig.iter_mut()).enumerate().take(n) {
             if angles & (1 << k) != 0 {
@@ -96,7 +98,7 @@ fn solve_n<T: Real, const N: usize>(
             }
         }
         eval_terms(g, gd, bodies, q);
-        let f = residual(g, gd, model, bodies);
+        let f = residual(g, gd, &gaps);
         res = f.amax();
         if !res.finite() {
             return Err(GroupFault::NonFiniteInput);
