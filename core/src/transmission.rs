@@ -13,29 +13,36 @@ use crate::error::StepError;
 use crate::kinematics::{acceleration, position, unit_rate, velocity};
 use crate::model::Model;
 use crate::scalar::{perp, rotate_cs, Real, Vec2};
+use crate::structomat::GroupData;
 use crate::workspace::{BodyState, Workspace};
-use nalgebra::SVector;
+use nalgebra::{SMatrix, SVector};
 
 /// Writes the COG velocities (`ẋ_G, ẏ_G, θ̇` per link) of the last velocity pass into
 /// column `j` of `V` and the groups' `ẋ` into column `j` of their `C`.
 fn record_velocity_column<T: Real>(model: &Model<T>, ws: &mut Workspace<T>, j: usize) {
-    for (i, l) in model.links().iter().enumerate() {
-        let Some(b) = ws.body.get(i + 1) else {
-            continue;
-        };
-        let r = rotate_cs(b.c, b.s, &l.cog);
-        let v = b.v + perp(&r) * b.omega;
-        for (row, val) in [(3 * i, v.x), (3 * i + 1, v.y), (3 * i + 2, b.omega)] {
-            if let Some(e) = ws.v.get_mut((row, j)) {
-                *e = val;
+    let Workspace { body, group, v, .. } = ws;
+    // Column j of the column-major V: its live rows, 3 per link.
+    if let Some(col) = v.as_mut_slice().get_mut(j * POSE_ROWS..(j + 1) * POSE_ROWS) {
+        for ((l, b), rows) in model
+            .links()
+            .iter()
+            .zip(body.iter().skip(1))
+            .zip(col.chunks_exact_mut(3))
+        {
+            let r = rotate_cs(b.c, b.s, &l.cog);
+            let vg = b.v + perp(&r) * b.omega;
+            if let [x, y, w] = rows {
+                (*x, *y, *w) = (vg.x, vg.y, b.omega);
             }
         }
     }
-    for gd in ws.group.iter_mut().take(model.groups().len()) {
-        for (k, x) in gd.xd.iter().enumerate() {
-            if let Some(e) = gd.dx_dq.get_mut((k, j)) {
-                *e = *x;
-            }
+    for gd in group.iter_mut().take(model.groups().len()) {
+        if let Some(col) = gd
+            .dx_dq
+            .as_mut_slice()
+            .get_mut(j * MAX_GROUP_VARS..(j + 1) * MAX_GROUP_VARS)
+        {
+            col.copy_from_slice(&gd.xd);
         }
     }
 }
@@ -103,34 +110,54 @@ pub fn evaluate_velocities<T: Real>(
         velocity(model, ws, &unit_rate::<T>(j));
         record_velocity_column(model, ws, j);
     }
+    // Where C was recorded: the next position pass predicts Newton's start from it.
+    for gd in ws.group.iter_mut().take(model.groups().len()) {
+        gd.dx_dq_at = (ws.q, gd.x);
+    }
     let mut rates = [T::zero(); MAX_DOF];
     for (k, r) in rates.iter_mut().enumerate().take(m) {
         *r = qd.get(k).copied().unwrap_or(T::zero());
     }
     ws.qd = rates;
-    // Speeds are linear in q̇: the actual COG speeds are V q̇, and each frame origin's
-    // follows as v_o = v_G - ω J R(θ) c (no further velocity pass).
-    let rates_v = SVector::<T, MAX_DOF>::from(rates);
-    let pose_rates = ws.v * rates_v;
-    for (i, l) in model.links().iter().enumerate().take(nb - 1) {
-        let Some(b) = ws.body.get_mut(i + 1) else {
-            continue;
-        };
-        let (vx, vy, w) = (
-            pose_rates[3 * i],
-            pose_rates[3 * i + 1],
-            pose_rates[3 * i + 2],
-        );
+    // Speeds are linear in q̇: the actual COG speeds are V q̇ (its live rows), and each
+    // frame origin's follows as v_o = v_G - ω J R(θ) c (no further velocity pass).
+    let Workspace { body, group, v, .. } = ws;
+    for (i, (l, b)) in model
+        .links()
+        .iter()
+        .zip(body.iter_mut().skip(1))
+        .enumerate()
+        .take(nb - 1)
+    {
+        let row = |k: usize| times_rates(v, k, &rates);
+        let (vx, vy, w) = (row(3 * i), row(3 * i + 1), row(3 * i + 2));
         b.omega = w;
         b.v = Vec2::new(vx, vy) - perp(&rotate_cs(b.c, b.s, &l.cog)) * w;
     }
-    for gd in ws.group.iter_mut().take(model.groups().len()) {
-        let xd = gd.dx_dq * rates_v;
-        for (dst, v) in gd.xd.iter_mut().zip(xd.iter()) {
-            *dst = *v;
+    for gd in group.iter_mut().take(model.groups().len()) {
+        let GroupData { xd, dx_dq, .. } = gd;
+        for (k, dst) in xd.iter_mut().enumerate() {
+            *dst = times_rates(dx_dq, k, &rates);
         }
     }
     Ok(())
+}
+
+/// `Σ_j m_kj q̇_j`: row `k` of `V` or `C` times the rates, summed over every column
+/// in order as nalgebra's matrix-vector product does (the padding columns' rates are
+/// zero).
+#[inline]
+fn times_rates<T: Real, const R: usize>(
+    m: &SMatrix<T, R, MAX_DOF>,
+    k: usize,
+    rates: &[T; MAX_DOF],
+) -> T {
+    let mut terms = rates
+        .iter()
+        .enumerate()
+        .map(|(j, r)| m.get((k, j)).copied().unwrap_or(T::zero()) * *r);
+    let first = terms.next().unwrap_or(T::zero());
+    terms.fold(first, |acc, t| acc + t)
 }
 
 /// Second derivatives `∂²P/∂q_j∂q_k` (into `pose`) and `∂²x/∂q_j∂q_k` of every group

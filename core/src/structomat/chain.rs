@@ -9,7 +9,7 @@
 //! The right-hand sides are the same derivatives evaluated with the group's unknown
 //! rates (or accelerations) set to zero, so no term is written twice.
 
-use super::{Angle, Base, Chain, Group, Length, PointRef, Term};
+use super::{Angle, Base, Chain, Group, Length, Placement, PointRef, Term};
 use crate::config::{MAX_CHAINS, MAX_DOF, MAX_GROUP_VARS, MAX_TERMS};
 use crate::error::GroupFault;
 use crate::model::Model;
@@ -66,6 +66,10 @@ pub struct GroupData<T: Real> {
     pub dx_dq: SMatrix<T, MAX_GROUP_VARS, MAX_DOF>,
     /// `ẍ` with `q̈ = 0`: the bias part of the group's accelerations.
     pub xdd_bias: [T; MAX_GROUP_VARS],
+    /// The coordinates and unknowns at which `dx_dq` was last recorded: Newton-Raphson
+    /// starts from the first-order prediction `x + C (q - q_C)` when its warm start is
+    /// still that `x` ([`newton`](super::newton)).
+    pub dx_dq_at: ([T; MAX_DOF], [T; MAX_GROUP_VARS]),
 }
 
 impl<T: Real> Default for GroupData<T> {
@@ -83,6 +87,7 @@ impl<T: Real> Default for GroupData<T> {
             cache: [[TermCache::default(); MAX_TERMS]; MAX_CHAINS],
             dx_dq: SMatrix::zeros(),
             xdd_bias: [T::zero(); MAX_GROUP_VARS],
+            dx_dq_at: ([T::zero(); MAX_DOF], [T::zero(); MAX_GROUP_VARS]),
         }
     }
 }
@@ -214,22 +219,22 @@ pub(crate) fn eval_terms<T: Real>(
     bodies: &[BodyState<T>],
     q: &[T],
 ) {
-    let (trig, x) = (gd.trig, gd.x);
-    for (ch, row) in g.chains.iter().zip(gd.cache.iter_mut()) {
+    let GroupData { trig, x, cache, .. } = gd;
+    for (ch, row) in g.chains.iter().zip(cache.iter_mut()) {
         for (t, c) in ch.terms.iter().zip(row.iter_mut()) {
             *c = match t {
                 Term::Arm { angle, v } => {
-                    let cs = angle_cs(angle, &trig, q, bodies);
+                    let cs = angle_cs(angle, trig, q, bodies);
                     TermCache {
                         w: rotate_cs(cs.x, cs.y, v),
                         s: T::zero(),
                     }
                 }
                 Term::Slide { angle, dir, s } => {
-                    let cs = angle_cs(angle, &trig, q, bodies);
+                    let cs = angle_cs(angle, trig, q, bodies);
                     TermCache {
                         w: rotate_cs(cs.x, cs.y, dir),
-                        s: length_at(*s, &x, q),
+                        s: length_at(*s, x, q),
                     }
                 }
             };
@@ -293,17 +298,72 @@ fn term_acc<T: Real>(
     }
 }
 
-/// Loop-closure residual `start + Σ terms - end` of every closing chain (m), stacked.
+/// Calls `col(k, ∂term/∂x_k)` for each unknown `x_k` the term depends on: its columns
+/// of `W = ∂f/∂x` (an arm: `J w` for its angle; a slide: `s J u` for its angle, `u` for
+/// its length).
+#[inline]
+fn term_columns<T: Real>(t: &Term<T>, c: &TermCache<T>, mut col: impl FnMut(u8, Vec2<T>)) {
+    match t {
+        Term::Arm { angle, .. } => {
+            if let Base::Var(k) = angle.base {
+                col(k, perp(&c.w));
+            }
+        }
+        Term::Slide { angle, s, .. } => {
+            if let Base::Var(k) = angle.base {
+                col(k, perp(&c.w) * c.s);
+            }
+            if let Length::Var(k) = s {
+                col(*k, c.w);
+            }
+        }
+    }
+}
+
+/// The part of a term's derivative that the group's unknown derivatives `u` make: its
+/// columns of `W` times `u` (the linear passes' `W u`, term by term).
+#[inline]
+fn term_unknown<T: Real>(t: &Term<T>, c: &TermCache<T>, u: &[T]) -> Vec2<T> {
+    let mut d = Vec2::zeros();
+    term_columns(t, c, |k, col| d += col * get(u, k));
+    d
+}
+
+/// `start - end` of every closing chain (m): the known part of its residual, the same
+/// for every Newton-Raphson iterate.
+pub(crate) fn chain_gaps<T: Real>(
+    g: &Group<T>,
+    model: &Model<T>,
+    bodies: &[BodyState<T>],
+) -> [Vec2<T>; MAX_CHAINS] {
+    let mut gaps = [Vec2::zeros(); MAX_CHAINS];
+    for (ch, gap) in g.chains.iter().zip(gaps.iter_mut()) {
+        if let Some(end) = ch.end {
+            *gap = point_pos(model, bodies, ch.start) - point_pos(model, bodies, end);
+        }
+    }
+    gaps
+}
+
+/// Loop-closure residual `start + Σ terms - end` of every closing chain (m), stacked;
+/// `gaps` from [`chain_gaps`].
 pub(crate) fn residual<T: Real>(
     g: &Group<T>,
     gd: &GroupData<T>,
-    model: &Model<T>,
-    bodies: &[BodyState<T>],
+    gaps: &[Vec2<T>; MAX_CHAINS],
 ) -> GroupVector<T> {
     let mut f = GroupVector::zeros();
-    for (ci, (ch, row)) in g.chains.iter().zip(gd.cache.iter()).enumerate() {
-        let Some(end) = ch.end else { continue };
-        let mut r = point_pos(model, bodies, ch.start) - point_pos(model, bodies, end);
+    for (ci, ((ch, row), gap)) in g
+        .chains
+        .iter()
+        .zip(gd.cache.iter())
+        .zip(gaps.iter())
+        .enumerate()
+    {
+        if ch.end.is_none() {
+            continue;
+        }
+        let mut r = *gap;
         for (t, c) in ch.terms.iter().zip(row.iter()) {
             r += term_pos(t, c);
         }
@@ -322,21 +382,15 @@ fn set2<T: Real>(f: &mut GroupVector<T>, ci: usize, r: Vec2<T>) {
     }
 }
 
-#[inline]
-fn add_col<T: Real>(w: &mut GroupMatrix<T>, ci: usize, k: u8, v: Vec2<T>) {
-    if let Some(e) = w.get_mut((2 * ci, k as usize)) {
-        *e += v.x;
-    }
-    if let Some(e) = w.get_mut((2 * ci + 1, k as usize)) {
-        *e += v.y;
-    }
-}
-
-/// The Jacobian `W = ∂f/∂x` from the cached terms (top-left `n × n`, identity padding).
-pub(crate) fn jacobian<T: Real>(g: &Group<T>, gd: &GroupData<T>) -> GroupMatrix<T> {
+/// The Jacobian `W = ∂f/∂x` from the cached terms in an `N × N` matrix: the top-left `n × n` block, identity
+/// padding past it (`N = 2` for a dyad, [`MAX_GROUP_VARS`] for the larger groups).
+pub(crate) fn jacobian<T: Real, const N: usize>(
+    g: &Group<T>,
+    gd: &GroupData<T>,
+) -> SMatrix<T, N, N> {
     let n = g.n_vars as usize;
-    let mut w = GroupMatrix::zeros();
-    for k in n..MAX_GROUP_VARS {
+    let mut w = SMatrix::<T, N, N>::zeros();
+    for k in n..N {
         if let Some(e) = w.get_mut((k, k)) {
             *e = T::one();
         }
@@ -346,56 +400,67 @@ pub(crate) fn jacobian<T: Real>(g: &Group<T>, gd: &GroupData<T>) -> GroupMatrix<
             continue;
         }
         for (t, c) in ch.terms.iter().zip(row.iter()) {
-            match t {
-                Term::Arm { angle, .. } => {
-                    if let Base::Var(k) = angle.base {
-                        add_col(&mut w, ci, k, perp(&c.w));
-                    }
+            term_columns(t, c, |k, col| {
+                if let Some(e) = w.get_mut((2 * ci, k as usize)) {
+                    *e += col.x;
                 }
-                Term::Slide { angle, s, .. } => {
-                    if let Base::Var(k) = angle.base {
-                        add_col(&mut w, ci, k, perp(&c.w) * c.s);
-                    }
-                    if let Length::Var(k) = s {
-                        add_col(&mut w, ci, *k, c.w);
-                    }
+                if let Some(e) = w.get_mut((2 * ci + 1, k as usize)) {
+                    *e += col.y;
                 }
-            }
+            });
         }
     }
     w
 }
 
-/// Inverts `W` and measures its conditioning; a dead point is an error.
+/// Inverts `W` into `gd.w_inv` and measures its conditioning; a dead point is an
+/// error (and leaves `gd.w_inv` as it was).
 pub(crate) fn factor<T: Real>(
     g: &Group<T>,
     gd: &mut GroupData<T>,
     singular_tol: T,
 ) -> Result<T, GroupFault> {
-    let n = g.n_vars as usize;
-    if n == 0 {
-        gd.conditioning = T::one();
-        return Ok(T::one());
+    // n is even (two rows per closing chain): each size with its own fixed matrices.
+    match g.n_vars {
+        0 => {
+            gd.conditioning = T::one();
+            Ok(T::one())
+        }
+        2 => factor_n::<T, 2>(g, gd, singular_tol),
+        4 => factor_n::<T, 4>(g, gd, singular_tol),
+        _ => factor_n::<T, MAX_GROUP_VARS>(g, gd, singular_tol),
     }
-    let w = jacobian(g, gd);
-    let mut norms = T::one();
-    for col in w.column_iter().take(n) {
-        norms *= col.norm();
-    }
+}
+
+/// [`factor`] for `n = N` unknowns.
+fn factor_n<T: Real, const N: usize>(
+    g: &Group<T>,
+    gd: &mut GroupData<T>,
+    singular_tol: T,
+) -> Result<T, GroupFault> {
+    let w = jacobian::<T, N>(g, gd);
     // A dyad's 2×2 inverse in closed form; larger groups by Gauss-Jordan.
-    let (inv, det) = if n == 2 {
-        let (a, b, c, d) = (w[(0, 0)], w[(0, 1)], w[(1, 0)], w[(1, 1)]);
+    let (inv, det) = if let (Some(&a), Some(&b), Some(&c), Some(&d), 2) = (
+        w.get((0, 0)),
+        w.get((0, 1)),
+        w.get((1, 0)),
+        w.get((1, 1)),
+        N,
+    ) {
         let det = a * d - b * c;
         let id = T::one() / det;
-        let mut m = GroupMatrix::identity();
-        m[(0, 0)] = d * id;
-        m[(0, 1)] = -b * id;
-        m[(1, 0)] = -c * id;
-        m[(1, 1)] = a * id;
+        let mut m = SMatrix::<T, N, N>::zeros();
+        for (e, v) in m.iter_mut().zip([d * id, -c * id, -b * id, a * id]) {
+            *e = v;
+        }
         (m, det)
     } else {
-        crate::linalg::invert(w, n).unwrap_or((GroupMatrix::identity(), T::zero()))
+        crate::linalg::invert(w, N).unwrap_or((SMatrix::identity(), T::zero()))
     };
+    let mut norms = T::one();
+    for col in w.column_iter() {
+        norms *= col.norm();
+    }
     let cond = if norms > T::zero() {
         det.abs() / norms
     } else {
@@ -407,8 +472,44 @@ pub(crate) fn factor<T: Real>(
             conditioning: cond.to_f64(),
         });
     }
-    gd.w_inv = inv;
+    // Only the top-left n × n block of `w_inv` is read.
+    for (c, col) in inv.column_iter().enumerate() {
+        for (r, v) in col.iter().enumerate() {
+            if let Some(e) = gd.w_inv.get_mut((r, c)) {
+                *e = *v;
+            }
+        }
+    }
     Ok(det)
+}
+
+/// Entry `t` of a chain's prefix sums: its start plus its first `t` terms (the anchor
+/// of a placement with prefix `t`), one row per chain.
+type PrefixSums<T> = [[Vec2<T>; MAX_TERMS + 1]; MAX_CHAINS];
+
+/// Fills one chain's row of [`PrefixSums`] from its start and its terms' values (past
+/// the chain's last term, the whole sum).
+#[inline]
+fn prefix_sums<T: Real>(
+    row: &mut [Vec2<T>; MAX_TERMS + 1],
+    start: Vec2<T>,
+    mut terms: impl Iterator<Item = Vec2<T>>,
+) {
+    let mut acc = start;
+    for slot in row.iter_mut() {
+        *slot = acc;
+        if let Some(v) = terms.next() {
+            acc += v;
+        }
+    }
+}
+
+#[inline]
+fn anchor<T: Real>(sums: &PrefixSums<T>, p: &Placement<T>) -> Vec2<T> {
+    sums.get(p.chain as usize)
+        .and_then(|r| r.get(p.prefix as usize))
+        .copied()
+        .unwrap_or_else(Vec2::zeros)
 }
 
 /// Sets the pose of every link of the group from the cached terms.
@@ -419,17 +520,14 @@ pub(crate) fn place<T: Real>(
     bodies: &mut [BodyState<T>],
     q: &[T],
 ) {
+    // The chains start at known points (of earlier groups): their prefix sums, once.
+    let mut sums: PrefixSums<T> = [[Vec2::zeros(); MAX_TERMS + 1]; MAX_CHAINS];
+    for ((ch, row), s) in g.chains.iter().zip(gd.cache.iter()).zip(sums.iter_mut()) {
+        let terms = ch.terms.iter().zip(row.iter()).map(|(t, c)| term_pos(t, c));
+        prefix_sums(s, point_pos(model, bodies, ch.start), terms);
+    }
     for p in g.placements.iter() {
-        let Some(ch) = g.chains.get(p.chain as usize) else {
-            continue;
-        };
-        let Some(row) = gd.cache.get(p.chain as usize) else {
-            continue;
-        };
-        let mut anchor = point_pos(model, bodies, ch.start);
-        for (t, c) in ch.terms.iter().zip(row.iter()).take(p.prefix as usize) {
-            anchor += term_pos(t, c);
-        }
+        let anchor = anchor(&sums, p);
         let theta = angle_at(&p.angle, &gd.x, q, bodies, Level::Pos);
         let cs = angle_cs(&p.angle, &gd.trig, q, bodies);
         if let Some(b) = bodies.get_mut(p.link as usize) {
@@ -467,108 +565,175 @@ pub(crate) fn position_from_terms<T: Real>(
     Ok(det)
 }
 
-/// The derivative level of a linear pass, with the coordinates' derivatives.
-#[derive(Clone, Copy)]
-enum Pass<'a, T> {
-    /// Velocities at the rates `qd`.
-    Vel { qd: &'a [T] },
-    /// Accelerations at the rates `qd` and accelerations `qdd`.
-    Acc { qd: &'a [T], qdd: &'a [T] },
-}
-
-impl<T: Real> Pass<'_, T> {
-    fn point(self, model: &Model<T>, bodies: &[BodyState<T>], p: PointRef) -> Vec2<T> {
-        match self {
-            Pass::Vel { .. } => point_vel(model, bodies, p),
-            Pass::Acc { .. } => point_acc(model, bodies, p),
-        }
-    }
-
-    /// A term's derivative with the group's unknown derivatives `u` (zeros: the known
-    /// part); `xd` are the unknowns' rates (used by the acceleration level).
-    fn term(
-        self,
+/// The derivative level of a linear pass (velocity or acceleration), with the
+/// coordinates' derivatives: what it reads of the known points, terms and angles, and
+/// what it sets on a link. One implementation per level, so the passes are compiled
+/// for each without a match per term.
+trait PassLevel<T: Real> {
+    /// The level's derivative of a known point.
+    fn point(&self, model: &Model<T>, bodies: &[BodyState<T>], p: PointRef) -> Vec2<T>;
+    /// A term's derivative with the group's unknown derivatives zero (its known part);
+    /// `xd` are the unknowns' rates (used by the acceleration level).
+    fn known_term(
+        &self,
         t: &Term<T>,
         c: &TermCache<T>,
         xd: &[T],
-        u: &[T],
+        bodies: &[BodyState<T>],
+    ) -> Vec2<T>;
+    /// A placement angle's derivative, the unknowns' being `u`.
+    fn angle(&self, a: &Angle<T>, u: &[T], bodies: &[BodyState<T>]) -> T;
+    /// Sets a link's rate (or acceleration) from its anchor point's and its angle's;
+    /// `r = R(θ) local` is the link's anchor point from its frame origin.
+    fn set_link(&self, b: &mut BodyState<T>, anchor: Vec2<T>, rate: T, r: Vec2<T>);
+    /// Where the unknowns' derivatives go in the group's data.
+    fn unknowns<'g>(&self, gd: &'g mut GroupData<T>) -> &'g mut [T; MAX_GROUP_VARS];
+}
+
+/// The velocity level at the rates `qd`.
+struct Vel<'a, T> {
+    qd: &'a [T],
+}
+
+impl<T: Real> PassLevel<T> for Vel<'_, T> {
+    #[inline]
+    fn point(&self, model: &Model<T>, bodies: &[BodyState<T>], p: PointRef) -> Vec2<T> {
+        point_vel(model, bodies, p)
+    }
+    #[inline]
+    fn known_term(
+        &self,
+        t: &Term<T>,
+        c: &TermCache<T>,
+        _: &[T],
         bodies: &[BodyState<T>],
     ) -> Vec2<T> {
-        match self {
-            Pass::Vel { qd } => term_vel(t, c, u, qd, bodies),
-            Pass::Acc { qd, qdd } => term_acc(t, c, xd, u, qd, qdd, bodies),
-        }
+        term_vel(t, c, &[], self.qd, bodies)
     }
+    #[inline]
+    fn angle(&self, a: &Angle<T>, u: &[T], bodies: &[BodyState<T>]) -> T {
+        angle_at(a, u, self.qd, bodies, Level::Vel)
+    }
+    #[inline]
+    fn set_link(&self, b: &mut BodyState<T>, anchor: Vec2<T>, rate: T, r: Vec2<T>) {
+        b.omega = rate;
+        b.v = anchor - perp(&r) * rate;
+    }
+    #[inline]
+    fn unknowns<'g>(&self, gd: &'g mut GroupData<T>) -> &'g mut [T; MAX_GROUP_VARS] {
+        &mut gd.xd
+    }
+}
 
-    fn angle(self, a: &Angle<T>, u: &[T], bodies: &[BodyState<T>]) -> T {
-        match self {
-            Pass::Vel { qd } => angle_at(a, u, qd, bodies, Level::Vel),
-            Pass::Acc { qdd, .. } => angle_at(a, u, qdd, bodies, Level::Acc),
-        }
+/// The acceleration level at the rates `qd` and accelerations `qdd`.
+struct Acc<'a, T> {
+    qd: &'a [T],
+    qdd: &'a [T],
+}
+
+impl<T: Real> PassLevel<T> for Acc<'_, T> {
+    #[inline]
+    fn point(&self, model: &Model<T>, bodies: &[BodyState<T>], p: PointRef) -> Vec2<T> {
+        point_acc(model, bodies, p)
+    }
+    #[inline]
+    fn known_term(
+        &self,
+        t: &Term<T>,
+        c: &TermCache<T>,
+        xd: &[T],
+        bodies: &[BodyState<T>],
+    ) -> Vec2<T> {
+        term_acc(t, c, xd, &[], self.qd, self.qdd, bodies)
+    }
+    #[inline]
+    fn angle(&self, a: &Angle<T>, u: &[T], bodies: &[BodyState<T>]) -> T {
+        angle_at(a, u, self.qdd, bodies, Level::Acc)
+    }
+    #[inline]
+    fn set_link(&self, b: &mut BodyState<T>, anchor: Vec2<T>, rate: T, r: Vec2<T>) {
+        b.alpha = rate;
+        b.a = anchor - perp(&r) * rate + r * (b.omega * b.omega);
+    }
+    #[inline]
+    fn unknowns<'g>(&self, gd: &'g mut GroupData<T>) -> &'g mut [T; MAX_GROUP_VARS] {
+        &mut gd.xdd
     }
 }
 
 /// One linear pass: solves `W u = -(the level's derivative of f with u = 0)` for the
 /// unknowns' rates (or accelerations) `u` and sets the links' velocities (or
-/// accelerations) from the chains' prefix sums.
+/// accelerations) from the chains' prefix sums. Each term's known part is evaluated
+/// once: it makes the right-hand side, and with the term's `W` columns times `u` its
+/// whole derivative in the prefix sums.
 fn linear_pass<T: Real>(
     g: &Group<T>,
     gd: &mut GroupData<T>,
     model: &Model<T>,
     bodies: &mut [BodyState<T>],
-    pass: Pass<'_, T>,
+    level: &impl PassLevel<T>,
 ) {
-    let zero = [T::zero(); MAX_GROUP_VARS];
-    let n = g.n_vars as usize;
-    let mut u = zero;
-    if n > 0 {
-        let mut rhs = GroupVector::zeros();
-        for (ci, (ch, row)) in g.chains.iter().zip(gd.cache.iter()).enumerate() {
-            let Some(end) = ch.end else { continue };
-            let mut r = pass.point(model, bodies, ch.start) - pass.point(model, bodies, end);
-            for (t, c) in ch.terms.iter().zip(row.iter()) {
-                r += pass.term(t, c, &gd.xd, &zero, bodies);
-            }
-            set2(&mut rhs, ci, -r);
+    let n = (g.n_vars as usize).min(MAX_GROUP_VARS);
+    let mut starts = [Vec2::zeros(); MAX_CHAINS];
+    let mut known = [[Vec2::zeros(); MAX_TERMS]; MAX_CHAINS];
+    let mut rhs = [T::zero(); MAX_GROUP_VARS];
+    for (((ch, row), (start, kn)), f) in g
+        .chains
+        .iter()
+        .zip(gd.cache.iter())
+        .zip(starts.iter_mut().zip(known.iter_mut()))
+        .zip(rhs.chunks_exact_mut(2))
+    {
+        *start = level.point(model, bodies, ch.start);
+        for ((t, c), k) in ch.terms.iter().zip(row.iter()).zip(kn.iter_mut()) {
+            *k = level.known_term(t, c, &gd.xd, bodies);
         }
-        // Only the top-left n × n block of W⁻¹ is live.
-        for (r, ur) in u.iter_mut().enumerate().take(n) {
-            let mut acc = T::zero();
-            for (c, rc) in rhs.iter().enumerate().take(n) {
-                acc += gd.w_inv.get((r, c)).copied().unwrap_or(T::zero()) * *rc;
-            }
-            *ur = acc;
+        let Some(end) = ch.end else { continue };
+        let mut r = *start - level.point(model, bodies, end);
+        for k in kn.iter().take(ch.terms.len()) {
+            r += *k;
+        }
+        if let [fx, fy] = f {
+            *fx = -r.x;
+            *fy = -r.y;
         }
     }
-    match pass {
-        Pass::Vel { .. } => gd.xd = u,
-        Pass::Acc { .. } => gd.xdd = u,
+    // u = W⁻¹ rhs; only the top-left n × n block of W⁻¹ is live.
+    let mut u = [T::zero(); MAX_GROUP_VARS];
+    for (r, ur) in u.iter_mut().enumerate().take(n) {
+        let mut acc = T::zero();
+        for (c, rc) in rhs.iter().enumerate().take(n) {
+            acc += gd.w_inv.get((r, c)).copied().unwrap_or(T::zero()) * *rc;
+        }
+        *ur = acc;
     }
+    *level.unknowns(gd) = u;
+    // Each placement's anchor: its chain's start plus its prefix of whole term
+    // derivatives (a dyad's links need 0 and 1 terms: no table of sums).
     for p in g.placements.iter() {
-        let (Some(ch), Some(row)) = (
-            g.chains.get(p.chain as usize),
-            gd.cache.get(p.chain as usize),
+        let c = p.chain as usize;
+        let (Some(ch), Some(row), Some(start), Some(kn)) = (
+            g.chains.get(c),
+            gd.cache.get(c),
+            starts.get(c),
+            known.get(c),
         ) else {
             continue;
         };
-        let mut anchor = pass.point(model, bodies, ch.start);
-        for (t, c) in ch.terms.iter().zip(row.iter()).take(p.prefix as usize) {
-            anchor += pass.term(t, c, &gd.xd, &u, bodies);
+        let mut anchor = *start;
+        for ((t, c), k) in ch
+            .terms
+            .iter()
+            .zip(row.iter())
+            .zip(kn.iter())
+            .take(p.prefix as usize)
+        {
+            anchor += *k + term_unknown(t, c, &u);
         }
-        let rate = pass.angle(&p.angle, &u, bodies);
-        let Some(b) = bodies.get_mut(p.link as usize) else {
-            continue;
-        };
-        let r = rotate_cs(b.c, b.s, &p.local);
-        match pass {
-            Pass::Vel { .. } => {
-                b.omega = rate;
-                b.v = anchor - perp(&r) * rate;
-            }
-            Pass::Acc { .. } => {
-                b.alpha = rate;
-                b.a = anchor - perp(&r) * rate + r * (b.omega * b.omega);
-            }
+        let rate = level.angle(&p.angle, &u, bodies);
+        if let Some(b) = bodies.get_mut(p.link as usize) {
+            let r = rotate_cs(b.c, b.s, &p.local);
+            level.set_link(b, anchor, rate, r);
         }
     }
 }
@@ -581,7 +746,7 @@ pub(crate) fn velocity_pass<T: Real>(
     bodies: &mut [BodyState<T>],
     qd: &[T],
 ) {
-    linear_pass(g, gd, model, bodies, Pass::Vel { qd });
+    linear_pass(g, gd, model, bodies, &Vel { qd });
 }
 
 /// Solves `W ẍ = -(f̈ with ẍ = 0)` and sets the links' accelerations (needs the
@@ -594,7 +759,7 @@ pub(crate) fn acceleration_pass<T: Real>(
     qd: &[T],
     qdd: &[T],
 ) {
-    linear_pass(g, gd, model, bodies, Pass::Acc { qd, qdd });
+    linear_pass(g, gd, model, bodies, &Acc { qd, qdd });
 }
 
 /// The closing chain of a dyad and its end pole (the closed forms' common start).
