@@ -9,7 +9,7 @@ use crate::dynamics::solve_accelerations;
 use crate::error::{GroupId, StepError};
 use crate::integrator::OdeSystem;
 use crate::kinematics::assemble;
-use crate::kinematics::group_id;
+use crate::kinematics::{group_id, position};
 use crate::model::{Model, ModelBuilder};
 use crate::motor::Motor;
 use crate::scalar::{cross, perp, rotate_cs, Real, Vec2};
@@ -72,6 +72,9 @@ pub(crate) struct Slot<T: Real> {
     pub ws: Workspace<T>,
     pub mode: Mode,
     pub coords: Coordinates,
+    /// Whether `model` is the built model of `mode` and `coords` and `ws` holds an
+    /// assembly of it (its groups' branches), which [`Slot::reposition`] can move.
+    pub built: bool,
 }
 
 impl<T: Real> Clone for Slot<T> {
@@ -82,16 +85,18 @@ impl<T: Real> Clone for Slot<T> {
             ws: self.ws.clone(),
             mode: self.mode,
             coords: self.coords,
+            built: self.built,
         }
     }
 
-    /// In place (the twin's pre-step backup): no temporary slot on the stack.
+    /// In place: no temporary slot on the stack.
     fn clone_from(&mut self, source: &Self) {
         self.model.clone_from(&source.model);
         self.map = source.map;
         self.ws.clone_from(&source.ws);
         self.mode = source.mode;
         self.coords = source.coords;
+        self.built = source.built;
     }
 }
 
@@ -104,6 +109,7 @@ impl<T: Real> Slot<T> {
             ws: Workspace::new(),
             mode: Mode::Free,
             coords: Coordinates::CrankSwing,
+            built: false,
         }
     }
 
@@ -119,6 +125,7 @@ impl<T: Real> Slot<T> {
         pose: &[T; 9],
         time: f64,
     ) -> Result<[T; 2], StepError> {
+        self.built = false;
         self.map = build_into(params, mode, coords, pose, &mut self.model).map_err(|_| {
             StepError::NonFinite {
                 time,
@@ -128,7 +135,74 @@ impl<T: Real> Slot<T> {
         self.mode = mode;
         self.coords = coords;
         self.ws.reset();
-        self.assemble_at(pose, time)
+        let q = self.assemble_at(pose, time)?;
+        self.built = true;
+        Ok(q)
+    }
+
+    /// [`Slot::rebuild`] without building the model again when the slot holds the
+    /// model of `mode` and `coords`, assembled, and it is the model a rebuild at `pose`
+    /// would give, up to rounding: a position pass at `pose`'s coordinates from the
+    /// groups' present branches then places every physical link at its angle in
+    /// `pose` (the same branches, the same locked pins and A68 lever offset; only the
+    /// assembly guesses, the angles at the last build, differ). Otherwise (or if the
+    /// pass fails) it rebuilds. Dyads give the same bits as a rebuild; a Newton group
+    /// (triad, six-link group) converges from its last unknowns instead of the guesses.
+    pub fn reposition(
+        &mut self,
+        params: &CccParams<T>,
+        mode: Mode,
+        coords: Coordinates,
+        pose: &[T; 9],
+        time: f64,
+    ) -> Result<[T; 2], StepError> {
+        if self.built && self.mode == mode && self.coords == coords {
+            let q = self.map.coordinates_at(pose);
+            let placed = position(
+                &self.model,
+                &mut self.ws,
+                q.get(..self.map.dof).unwrap_or(&[]),
+                time,
+            )
+            .is_ok();
+            if placed && self.matches(params, pose) {
+                return Ok(q);
+            }
+        }
+        self.rebuild(params, mode, coords, pose, time)
+    }
+
+    /// Whether the slot's model is the one a rebuild at `pose` would declare, up to
+    /// rounding, and its last position pass placed every physical link at its angle in
+    /// `pose` (modulo 2π) to 1e-6 rad (1000 ulps in f32): a wrong branch is off by a
+    /// sizeable angle, rounding by ~1e-13 rad. The state-dependent parts are checked
+    /// to rounding, not to that tolerance: a locked lever's pin was placed at exactly
+    /// its angle in `pose` (a lever locked again near where it locked before is a new
+    /// pin), and A68's lever offset is `pose`'s angle between the levers to 16 ulps.
+    fn matches(&self, params: &CccParams<T>, pose: &[T; 9]) -> bool {
+        let th = |p: usize| pose.get(p).copied().unwrap_or(T::zero());
+        let parts_same = BRANCHES.iter().all(|(_, lever)| {
+            let off = self.map.offset.get(*lever).copied().unwrap_or(T::zero());
+            if self.body(*lever) == 0 {
+                return off == th(*lever);
+            }
+            if off == T::zero() {
+                return true;
+            }
+            // Lever 8 in A68, in lever 6's body.
+            let (_, l6) = BRANCHES[0];
+            let between = th(*lever) - th(l6);
+            let ulps = T::EPS * T::c(16.0) * (th(*lever).abs() + th(l6).abs() + T::one());
+            (off - between).abs() <= ulps
+        });
+        let tol = T::c(1e-6).max(T::EPS * T::c(1e3));
+        let tau = T::two_pi();
+        let links = self.links(params);
+        parts_same
+            && links.iter().zip(pose.iter()).skip(1).all(|(l, p)| {
+                let d = l.theta - *p;
+                (d - tau * (d / tau).round()).abs() <= tol
+            })
     }
 
     /// Assembles the slot's model at the physical angles `pose` from a fresh workspace;
@@ -160,6 +234,21 @@ impl<T: Real> Slot<T> {
         // checked reads keep the step path free of a reachable panic.
         let at = |c: usize| v.get((r, c)).copied().unwrap_or_else(T::zero);
         [at(0), at(1)]
+    }
+
+    /// Physical link `p`'s angular acceleration at `q̈ = 0` (the bias `a_b` of the last
+    /// evaluation, SPEC 1): `α_p = omega_row(p)·q̈ + alpha_bias(p)`. Zero for a link the
+    /// mode has no body for.
+    pub fn alpha_bias(&self, p: usize) -> T {
+        match self.body(p) as usize {
+            0 => T::zero(),
+            b => self
+                .ws
+                .a_bias
+                .get(3 * (b - 1) + 2)
+                .copied()
+                .unwrap_or(T::zero()),
+        }
     }
 
     /// The body the shaft and the load act on (A modes), if any.
@@ -276,6 +365,28 @@ impl<T: Real> Slot<T> {
         out
     }
 
+    /// Physical link `p`'s frame direction `(cos θ_p, sin θ_p)` at the last evaluation,
+    /// from its model body's evaluated frame: a sine and cosine are computed only for a
+    /// link with an angle offset (a locked lever, lever 8 in A68).
+    pub fn frame(&self, p: usize) -> Vec2<T> {
+        let off = self.map.offset.get(p).copied().unwrap_or(T::zero());
+        let b = self.body(p);
+        if b == 0 {
+            return Vec2::new(off.cos(), off.sin());
+        }
+        let s = self.ws.body.get(b as usize).copied().unwrap_or_default();
+        if off == T::zero() {
+            Vec2::new(s.c, s.s)
+        } else {
+            rotate_cs(s.c, s.s, &Vec2::new(off.cos(), off.sin()))
+        }
+    }
+
+    /// [`Slot::frame`] of every physical link (index 0 unused).
+    pub fn frames(&self) -> [Vec2<T>; 9] {
+        core::array::from_fn(|p| self.frame(p))
+    }
+
     /// The force on lever `lever` (6 or 8) from its rod at its pin (G or I), N, from
     /// the last kinetostatics; zero if the model has no such joint.
     fn rod_force_on_lever(&self, rod: usize, lever: usize) -> Vec2<T> {
@@ -309,7 +420,7 @@ impl<T: Real> Slot<T> {
             }
             let s = links.get(lever).copied().unwrap_or_default();
             let len = params.link(lever).length;
-            let u = Vec2::new(s.theta.cos(), s.theta.sin());
+            let u = self.frame(lever);
             let tip = u * len;
             let cog = u * (len * T::c(0.5));
             let weight = params.gravity * params.link(lever).mass;
@@ -368,7 +479,7 @@ impl<T: Real> Slot<T> {
         for (slot, (tip_joint, lever)) in [(9usize, (7usize, 6usize)), (10, (8, 8))] {
             let s = links.get(lever).copied().unwrap_or_default();
             let b = params.link(lever);
-            let r = Vec2::new(s.theta.cos(), s.theta.sin()) * (b.length * T::c(0.5));
+            let r = self.frame(lever) * (b.length * T::c(0.5));
             let a_g = perp(&r) * s.alpha - r * (s.omega * s.omega);
             let on_lever_from_rod = out.get(tip_joint).copied().unwrap_or_default();
             if let Some(o) = out.get_mut(slot) {
@@ -472,11 +583,12 @@ pub(crate) fn mass_properties<T: Real>(params: &CccParams<T>, p: usize) -> (T, T
 }
 
 /// Kinetic and potential energy of the physical links (and of the shaft turning at
-/// `shaft_speed`), J: computed from the physical state, independently of the mode's
-/// model.
+/// `shaft_speed`), J: computed from the physical state (the links and their frame
+/// directions, [`Slot::frames`]), independently of the mode's model.
 pub(crate) fn physical_energy<T: Real>(
     params: &CccParams<T>,
     links: &[LinkState<T>; 9],
+    frames: &[Vec2<T>; 9],
     shaft_speed: T,
 ) -> (T, T) {
     let half = T::c(0.5);
@@ -484,9 +596,9 @@ pub(crate) fn physical_energy<T: Real>(
         half * params.shaft_inertia * shaft_speed * shaft_speed,
         T::zero(),
     );
-    for (p, s) in links.iter().enumerate().skip(1) {
+    for (p, (s, f)) in links.iter().zip(frames.iter()).enumerate().skip(1) {
         let (m, i, c) = mass_properties(params, p);
-        let r = rotate_cs(s.theta.cos(), s.theta.sin(), &c);
+        let r = rotate_cs(f.x, f.y, &c);
         let v = s.velocity + perp(&r) * s.omega;
         k += half * (m * v.norm_squared() + i * s.omega * s.omega);
         u -= m * params.gravity.dot(&(s.origin + r));

@@ -486,8 +486,8 @@ impl<T: Real> Twin<T> {
         } else {
             Mode::Free
         };
-        let mut slot = Slot::empty();
-        let q = best_slot(&params, mode, &pose, 0.0, &mut slot)?;
+        let (mut slot, mut spare) = (Slot::empty(), Slot::empty());
+        let q = best_slot(&params, mode, &pose, 0.0, &mut slot, &mut spare)?;
         let mut y = SVector::<T, STATE>::zeros();
         // Initial link speeds: those of the crank and the swing link (the others follow
         // from the kinematics; the first choice of a 2-DOF mode is crank + swing link).
@@ -502,7 +502,7 @@ impl<T: Real> Twin<T> {
             drive: params.drive.sign(),
             params,
             settings,
-            cand: slot.clone(),
+            cand: spare,
             reference: slot.clone(),
             backup: slot.clone(),
             slot,
@@ -536,9 +536,10 @@ impl<T: Real> Twin<T> {
             twin.choose(&mut w, EventKind::Start, &inputs)?;
         }
         twin.y = w.y;
-        let audit = twin.audit_of(&twin.slot.links(&twin.params), &w);
+        let links = twin.slot.links(&twin.params);
+        let audit = twin.audit_of(&links, &w);
         audit_finite(&audit, w.t)?;
-        twin.commit(&w, audit);
+        twin.commit(&w, audit, links);
         let (k, u) = (twin.audit.kinetic, twin.audit.potential);
         twin.audit.initial = k + u;
         Ok(twin)
@@ -570,10 +571,10 @@ impl<T: Real> Twin<T> {
                 .advance(&mut w, inputs, changed, *substeps)
                 .and_then(|()| self.check_energy(&w));
             match result {
-                Ok(audit) => {
+                Ok((audit, links)) => {
                     self.y = w.y;
                     self.steps += 1;
-                    self.commit(&w, audit);
+                    self.commit(&w, audit, links);
                     self.inputs = *inputs;
                     return Ok(());
                 }
@@ -665,7 +666,8 @@ impl<T: Real> Twin<T> {
     /// The audit at the end of a step in `w` (the slot holds its evaluation).
     fn audit_of(&self, links: &[LinkState<T>; 9], w: &Work<T>) -> Audit<T> {
         let shaft = shaft_speed(self.slot.mode, links);
-        let (kinetic, potential) = physical_energy(&self.params, links, shaft);
+        let frames = self.slot.frames();
+        let (kinetic, potential) = physical_energy(&self.params, links, &frames, shaft);
         Audit {
             motor_work: w.y[W_MOTOR],
             load_work: w.y[W_LOAD],
@@ -676,16 +678,17 @@ impl<T: Real> Twin<T> {
         }
     }
 
-    /// The audit at the end of the step in `w`, or an error if its residual moved past
+    /// The audit at the end of the step in `w` and the physical links it is computed
+    /// from (the state [`Twin::commit`] takes), or an error if its residual moved past
     /// the tolerance over the step.
-    fn check_energy(&self, w: &Work<T>) -> Result<Audit<T>, TwinError> {
+    fn check_energy(&self, w: &Work<T>) -> Result<(Audit<T>, [LinkState<T>; 9]), TwinError> {
         let links = self.slot.links(&self.params);
         let a = self.audit_of(&links, w);
         audit_finite(&a, w.t)?;
         let jump = a.residual() - self.audit.residual();
         let scale = T::one() + a.motor_work.abs() + a.kinetic.abs() + a.potential.abs();
         if jump.abs() <= self.settings.energy_tol * scale {
-            return Ok(a);
+            return Ok((a, links));
         }
         let (group, conditioning) = self.slot.worst_group();
         Err(TwinError::Diverged {
@@ -722,7 +725,6 @@ impl<T: Real> Twin<T> {
             // Inputs changed: re-evaluate here and see whether the mode still holds.
             self.finish(w, inputs)?;
             if self.settings.clutch && self.guards.iter().flatten().any(|g| *g > T::zero()) {
-                self.backup_once(w);
                 self.choose(w, EventKind::Inputs, inputs)?;
             }
         }
@@ -776,8 +778,11 @@ impl<T: Real> Twin<T> {
             self.dp5.dense(theta, &mut ye);
             w.t = t0 + theta * h;
             w.y = ye;
-            self.backup_once(w);
-            self.finish(w, inputs)?;
+            // The mode choice reads the old mode's positions and speeds only (the new
+            // mode is evaluated in full): no accelerations or kinetostatics here.
+            self.slot
+                .eval_speeds(w.t, &w.y)
+                .map_err(|e| self.physical_error(e))?;
             self.choose(w, kind, inputs)?;
         }
         if self.slot.mode != Mode::Jam && self.slot.conditioning() < self.settings.switch_below {
@@ -790,16 +795,34 @@ impl<T: Real> Twin<T> {
         Ok(())
     }
 
-    /// Keeps the pre-step slot the first time a step changes it.
-    fn backup_once(&mut self, w: &mut Work<T>) {
-        if !w.switched {
-            self.backup.clone_from(&self.slot);
+    /// The slot new modes and coordinate choices are built in (with the parameters):
+    /// the backup until the step first changes the current slot (the backup holds
+    /// nothing the step needs until then), the candidate slot after. So
+    /// [`Twin::take_candidate`] keeps the pre-step slot as the backup with one swap, no
+    /// copy (a slot is 30 KB in f64).
+    fn scratch(&mut self, switched: bool) -> (&mut Slot<T>, &CccParams<T>) {
+        let slot = if switched {
+            &mut self.cand
+        } else {
+            &mut self.backup
+        };
+        (slot, &self.params)
+    }
+
+    /// Makes the scratch slot ([`Twin::scratch`]), which holds the new mode or
+    /// coordinates, the current one; the first time in a step the pre-step slot goes
+    /// to the backup.
+    fn take_candidate(&mut self, w: &mut Work<T>) {
+        if w.switched {
+            core::mem::swap(&mut self.slot, &mut self.cand);
+        } else {
+            core::mem::swap(&mut self.slot, &mut self.backup);
             w.switched = true;
         }
     }
 
     /// Back to the state before the step: the pre-step slot (kept by
-    /// [`Twin::backup_once`] if the step changed it) with its group unknowns `saved`.
+    /// [`Twin::take_candidate`] if the step changed it) with its group unknowns `saved`.
     fn restore(
         &mut self,
         switched: bool,
@@ -1080,7 +1103,14 @@ impl<T: Real> Twin<T> {
         }
         // Generalized momentum space of the unconstrained diode: the 2-DOF model, plus the
         // shaft when it has inertia.
-        let qr = best_slot(&self.params, Mode::I0, &pose, time, &mut self.reference)?;
+        let qr = best_slot(
+            &self.params,
+            Mode::I0,
+            &pose,
+            time,
+            &mut self.reference,
+            &mut self.cand,
+        )?;
         let mut yr = SVector::<T, STATE>::zeros();
         for k in 0..2 {
             yr[k] = qr[k];
@@ -1112,6 +1142,10 @@ impl<T: Real> Twin<T> {
         };
         let mut best: Option<(T, Mode)> = None;
         let mut chosen = None;
+        // The state the reference's workspace was last evaluated at.
+        let mut yr_at = yr;
+        // Candidates the screen found clearly inconsistent, not built.
+        let mut screened_out = false;
         self.candidates.clear();
         for (_, m) in cands.iter().copied() {
             let rows = constraint_rows(m, with_shaft, |lever| lever_row(&self.reference, lever));
@@ -1119,7 +1153,13 @@ impl<T: Real> Twin<T> {
                 let _ = self.candidates.push((m, T::c(f64::INFINITY)));
                 continue; // rank-deficient constraints
             };
-            let violation = self.try_candidate(w, m, &pose, &u_plus, from, inputs, tol_w)?;
+            let violation = match self.screen(m, from, &mut yr_at, &u_plus, w.t, inputs, tol_w) {
+                Some(v) if v > screen_margin::<T>() => {
+                    screened_out = true;
+                    v
+                }
+                _ => self.try_candidate(w, m, &pose, &u_plus, from, inputs, tol_w)?,
+            };
             let _ = self.candidates.push((m, violation));
             if violation <= T::zero() {
                 chosen = Some((m, loss, rows_mismatch(&rows, &u), true));
@@ -1127,6 +1167,29 @@ impl<T: Real> Twin<T> {
             }
             if best.as_ref().is_none_or(|(v, _)| violation < *v) {
                 best = Some((violation, m));
+            }
+        }
+        if chosen.is_none() && screened_out {
+            // No candidate is consistent: the least violating one is taken, so every
+            // candidate's violation is the built model's, as when none is screened.
+            best = None;
+            for i in 0..self.candidates.len() {
+                let Some(&(m, mut v)) = self.candidates.get(i) else {
+                    break;
+                };
+                if v.finite() {
+                    let rows =
+                        constraint_rows(m, with_shaft, |lever| lever_row(&self.reference, lever));
+                    if let Some((u_plus, _)) = project(&mass, &u, &rows) {
+                        v = self.try_candidate(w, m, &pose, &u_plus, from, inputs, tol_w)?;
+                    }
+                }
+                if let Some(c) = self.candidates.get_mut(i) {
+                    c.1 = v;
+                }
+                if best.as_ref().is_none_or(|(b, _)| v < *b) {
+                    best = Some((v, m));
+                }
             }
         }
         let (m, loss, mismatch, consistent) = match chosen {
@@ -1154,7 +1217,7 @@ impl<T: Real> Twin<T> {
             return Err(TwinError::Coasting { time });
         }
         // The candidate slot holds the chosen mode, evaluated: take it.
-        core::mem::swap(&mut self.slot, &mut self.cand);
+        self.take_candidate(w);
         w.y = self.cand_state(w);
         w.impact += loss;
         self.dp5.invalidate();
@@ -1237,7 +1300,7 @@ impl<T: Real> Twin<T> {
                 holds = false;
                 continue;
             }
-            let cond = self.cand.conditioning();
+            let cond = self.scratch(w.switched).0.conditioning();
             holds = chosen.is_none_or(|(c, _, _)| cond > c * T::c(1.5));
             if holds {
                 chosen = Some((cond, coords, self.speed_gap));
@@ -1254,17 +1317,47 @@ impl<T: Real> Twin<T> {
             }
             None => false,
         };
+        // The kinetostatics (the clutch torques) of the choice taken only.
+        let (cand, params) = self.scratch(w.switched);
+        let ok = ok && {
+            finish_accelerations(&cand.model, &mut cand.ws);
+            reactions(&cand.model, &mut cand.ws, w.t.to_f64()).is_ok()
+        };
         if !ok {
             return Ok(T::c(f64::INFINITY));
         }
-        let links = self.cand.links(&self.params);
-        let c = self.cand.clutch_torques(&self.params, &links);
+        let links = cand.links(params);
+        let c = cand.clutch_torques(params, &links);
+        log::debug!(
+            "candidate {m}: c = {:?}, alpha6 = {:?}, alpha8 = {:?}",
+            c,
+            links[6].alpha,
+            links[8].alpha,
+        );
+        Ok(self.violation(m, from, &c, &links, inputs, tol_w))
+    }
+
+    /// How far mode `m` (entered from `from`) with the clutch torques `c` and the
+    /// physical links' speeds and accelerations `links` violates SPEC 3's consistency
+    /// conditions, each relative to its scale (0: consistent): c_k ≥ 0 for a locked or
+    /// engaged lever, Σc_k ≤ T_r over the locked ones, a free lever touching the shaft
+    /// does not accelerate past it in the drive direction, a shaft starting from rest
+    /// accelerates in the drive direction.
+    fn violation(
+        &self,
+        m: Mode,
+        from: Mode,
+        c: &[T; 2],
+        links: &[LinkState<T>; 9],
+        inputs: &Inputs<T>,
+        tol_w: T,
+    ) -> T {
         let d = self.drive;
         let torque_scale = inputs.load + T::c(1.0) + c[0].abs() + c[1].abs();
         let tol_c = torque_tol(torque_scale);
         let alpha_scale = links.iter().fold(T::one(), |a, s| a.max(s.alpha.abs()));
         let tol_a = T::c(1e-9) * alpha_scale;
-        let shaft_alpha = shaft_accel(m, &links);
+        let shaft_alpha = shaft_accel(m, links);
         let mut v = T::zero();
         let mut locked = T::zero();
         for (k, ((_, lever), clutch)) in BRANCHES.iter().zip(m.clutches()).enumerate() {
@@ -1279,7 +1372,7 @@ impl<T: Real> Twin<T> {
                     // A free lever touching the shaft must not pass it in the drive
                     // direction.
                     let l = links.get(*lever).copied().unwrap_or_default();
-                    let rel_w = l.omega - shaft_speed(m, &links);
+                    let rel_w = l.omega - shaft_speed(m, links);
                     if rel_w.abs() <= tol_w {
                         let rel = d * (l.alpha - shaft_alpha);
                         v += (rel - tol_a).max(T::zero()) / alpha_scale;
@@ -1287,25 +1380,122 @@ impl<T: Real> Twin<T> {
                 }
             }
         }
-        log::debug!(
-            "candidate {m}: c = {:?}, alpha6 = {:?}, alpha8 = {:?}, shaft alpha = {:?}, violation so far {v:?}",
-            c,
-            links[6].alpha,
-            links[8].alpha,
-            shaft_alpha
-        );
         if !m.shaft_turning() {
             v += (locked - inputs.load - tol_c).max(T::zero()) / torque_scale;
         } else if !from.shaft_turning() {
             // A shaft starting from rest turns in the drive direction.
             v += (-d * shaft_alpha - tol_a).max(T::zero()) / alpha_scale;
         }
-        Ok(v)
+        v
+    }
+
+    /// Mode `m`'s violation of SPEC 3's consistency conditions (as
+    /// [`Twin::violation`]) from the reference model (I0, both levers free), without
+    /// building `m`'s model: `None` if it cannot tell. At the state `yr` with the
+    /// speeds `u_plus` after the impact projection, the reference's equations of motion
+    /// `M q̈ = Q` with the shaft as a third coordinate (inertia J_s, possibly 0; the load
+    /// -d·T_r on it while it turns) and `m`'s clutches as constraints on the
+    /// accelerations, `J q̈ = -β` (a locked lever's `α_k = 0`, an engaged one's
+    /// `α_k = α_s`, a held shaft's `α_s = 0`; `β`: the levers' bias accelerations), give
+    /// `q̈` and the multipliers λ of the KKT system `[M Jᵀ; J 0] [q̈; -λ] = [Q; -β]`:
+    /// λ_k is the torque lever k's clutch applies to it, so `c_k = -d·λ_k` (SPEC 3: the
+    /// moment of everything else on the lever minus `I_H α_k`). The same motion as
+    /// `m`'s own model, up to rounding.
+    #[allow(clippy::too_many_arguments)]
+    fn screen(
+        &mut self,
+        m: Mode,
+        from: Mode,
+        yr: &mut SVector<T, STATE>,
+        u_plus: &SVector<T, 3>,
+        t: T,
+        inputs: &Inputs<T>,
+        tol_w: T,
+    ) -> Option<T> {
+        let d = self.drive;
+        // The reference evaluated at the candidate's speeds, unless the speeds `yr` its
+        // workspace holds differ from them by under 1e-3 of the screen's margin
+        // (relative to the largest speed): the bias accelerations, quadratic in the
+        // speeds, then differ by 2e-3 of the margin at most. Without an impact (a
+        // release, a catch located in time) the projection moves the speeds by rounding.
+        let scale = u_plus.iter().fold(T::one(), |a, v| a.max(v.abs()));
+        let moved = (0..2).fold(T::zero(), |a, k| a.max((yr[QD + k] - u_plus[k]).abs()));
+        if !(moved <= screen_margin::<T>() * T::c(1e-3) * scale) {
+            yr[QD] = u_plus[0];
+            yr[QD + 1] = u_plus[1];
+            if self.reference.eval(t, yr, inputs, d).is_err() {
+                // The workspace holds no evaluation: the next screen evaluates again.
+                yr[QD] = T::c(f64::NAN);
+                return None;
+            }
+        }
+        let r = &self.reference;
+        let row = |lever: usize| {
+            let [v0, v1] = r.omega_row(lever);
+            SVector::<T, 3>::new(v0, v1, T::zero())
+        };
+        let rows = constraint_rows(m, true, row);
+        // The constraints' bias terms: the same combinations of the levers' bias
+        // accelerations (first component; the shaft's bias is 0).
+        let bias = constraint_rows(m, true, |lever| {
+            SVector::<T, 3>::new(r.alpha_bias(lever), T::zero(), T::zero())
+        });
+        let mut kkt = SMatrix::<T, 6, 6>::identity();
+        let mut rhs = SVector::<T, 6>::zeros();
+        for i in 0..2 {
+            for j in 0..2 {
+                kkt[(i, j)] = r.ws.mass_q[(i, j)];
+            }
+            rhs[i] = r.ws.gen_force[i];
+        }
+        kkt[(2, 2)] = self.params.shaft_inertia;
+        if m.shaft_turning() {
+            rhs[2] = -d * inputs.load;
+        }
+        // At most the three coordinates' worth of constraints (3 rows per mode).
+        for (i, (a, b)) in rows.iter().zip(bias.iter()).take(3).enumerate() {
+            let k = 3 + i;
+            for (j, aj) in a.iter().enumerate() {
+                for at in [(k, j), (j, k)] {
+                    if let Some(e) = kkt.get_mut(at) {
+                        *e = *aj;
+                    }
+                }
+            }
+            if let Some(e) = kkt.get_mut((k, k)) {
+                *e = T::zero();
+            }
+            if let Some(e) = rhs.get_mut(k) {
+                *e = -b[0];
+            }
+        }
+        let x = crate::linalg::solve(kkt, rhs)?;
+        if x.iter().any(|v| !v.finite()) {
+            return None;
+        }
+        // The multipliers in the order of `constraint_rows`: one per locked or engaged
+        // lever, in branch order.
+        let mut c = [T::zero(); 2];
+        let mut i = 3;
+        for (ck, clutch) in c.iter_mut().zip(m.clutches()) {
+            if clutch != Clutch::Free {
+                *ck = d * x.get(i).copied().unwrap_or(T::zero());
+                i += 1;
+            }
+        }
+        let mut links = [LinkState::default(); 9];
+        for (p, l) in links.iter_mut().enumerate().skip(1) {
+            let v = row(p);
+            l.omega = v[0] * u_plus[0] + v[1] * u_plus[1];
+            l.alpha = v[0] * x[0] + v[1] * x[1] + r.alpha_bias(p);
+        }
+        Some(self.violation(m, from, &c, &links, inputs, tol_w))
     }
 
     /// Builds mode `m` driven by `coords` into the candidate slot at `pose` with the
-    /// physical speeds `omega` and evaluates it in full; `false` if it does not
-    /// assemble, fails, or cannot carry the speeds (its gap is left in `speed_gap`).
+    /// physical speeds `omega` and evaluates its equations of motion (not the
+    /// kinetostatics); `false` if it does not assemble, fails, or cannot carry the
+    /// speeds (its gap is left in `speed_gap`).
     #[allow(clippy::too_many_arguments)]
     fn load_candidate(
         &mut self,
@@ -1318,23 +1508,24 @@ impl<T: Real> Twin<T> {
         scale_w: T,
     ) -> bool {
         let time = w.t.to_f64();
-        let Ok(q) = self.cand.rebuild(&self.params, m, coords, pose, time) else {
+        let drive = self.drive;
+        let (cand, params) = self.scratch(w.switched);
+        let Ok(q) = cand.rebuild(params, m, coords, pose, time) else {
             return false;
         };
         let mut y = w.y;
-        load_state(&self.cand, &q, omega, &mut y);
-        if self.cand.eval(w.t, &y, inputs, self.drive).is_err() {
+        load_state(cand, &q, omega, &mut y);
+        if cand.eval(w.t, &y, inputs, drive).is_err() {
             return false;
         }
-        let mapped = self.cand.links(&self.params);
+        let mapped = cand.links(params);
         let off = (1..9).fold(T::zero(), |e, p| e.max((mapped[p].omega - omega[p]).abs()));
         self.speed_gap = off;
         if !(off <= speed_tol::<T>() * scale_w) {
             log::debug!("candidate {m} in {coords} coordinates cannot carry the speeds (off by {off:?} rad/s)");
             return false;
         }
-        finish_accelerations(&self.cand.model, &mut self.cand.ws);
-        reactions(&self.cand.model, &mut self.cand.ws, time).is_ok()
+        true
     }
 
     /// Tries the mode's other coordinate choices at `w`'s state and takes the best
@@ -1351,30 +1542,35 @@ impl<T: Real> Twin<T> {
         let pose = self.slot_links_unwrapped();
         let links = self.slot.links(&self.params);
         let now = self.slot.conditioning();
-        // (conditioning, choice, its coordinates) of the best other choice.
+        // (conditioning, choice, its coordinates) of the best other choice, which the
+        // candidate slot holds.
         let mut best: Option<(T, Coordinates, [T; 2])> = None;
-        let mut last_assembled = None;
         // The current choice is not assembled again: it is at this very pose with
         // conditioning `now`, so it could only win the scan by keeping its place, and
         // another choice is taken only if it beats `now` by 1.5.
         let skip = Some(self.slot.coords);
-        // The choices are assembled in the scratch slot and only the winner's choice is
-        // kept (assembled again below unless the slot still holds it): no slot is ever
-        // a temporary on the stack.
+        // The reference slot is the spare: the mode choice builds it again.
+        let scratch = if w.switched {
+            &mut self.cand
+        } else {
+            &mut self.backup
+        };
         let mut failures = scan_choices(
             &self.params,
             mode,
             &pose,
             time,
             skip,
-            &mut self.cand,
-            |coords, s, q| {
+            scratch,
+            &mut self.reference,
+            |s, q| {
                 let cond = s.conditioning();
                 if best.as_ref().is_none_or(|(b, _, _)| cond > *b) {
-                    best = Some((cond, coords, q));
+                    best = Some((cond, s.coords, q));
+                    Take::Keep
+                } else {
+                    Take::No
                 }
-                last_assembled = Some(coords);
-                false
             },
         )?;
         if failed.is_none() && best.is_none() {
@@ -1403,23 +1599,8 @@ impl<T: Real> Twin<T> {
         if !(failed.is_some() || cond > now * T::c(1.5)) {
             return Ok(());
         }
-        // The scratch slot holds the winner if it was the last choice tried (the scan
-        // tries them in order; a failed one after it leaves the slot half-built).
-        let order = |c: Coordinates| mode.coordinate_choices().iter().position(|x| *x == c);
-        let holds_winner = last_assembled == Some(coords)
-            && failures.iter().all(|f| order(f.coords) < order(coords));
-        if !holds_winner {
-            // The same pose: the same bits as in the scan.
-            self.cand
-                .rebuild(&self.params, mode, coords, &pose, time)
-                .map_err(TwinError::Step)?;
-        }
         let from = self.slot.coords;
-        // Kept only now that the slot changes: most scans (every step while the
-        // conditioning is under `switch_below` and no choice is 1.5 times better) keep
-        // it, and the copy is a whole slot.
-        self.backup_once(w);
-        core::mem::swap(&mut self.slot, &mut self.cand);
+        self.take_candidate(w);
         let omega: [T; 9] = core::array::from_fn(|p| links[p].omega);
         load_state(&self.slot, &q, &omega, &mut w.y);
         self.dp5.invalidate();
@@ -1444,12 +1625,10 @@ impl<T: Real> Twin<T> {
 
     /// Makes the state after a successful step the twin's: physical links (angles
     /// unwrapped), shaft, clutch torques, reactions, the energy audit.
-    fn commit(&mut self, w: &Work<T>, audit: Audit<T>) {
+    fn commit(&mut self, w: &Work<T>, audit: Audit<T>, mut links: [LinkState<T>; 9]) {
         self.t = w.t;
-        let angles = self.slot_links_unwrapped();
-        let mut links = self.slot.links(&self.params);
-        for (l, a) in links.iter_mut().zip(angles.iter()).skip(1) {
-            l.theta = *a;
+        for (l, last) in links.iter_mut().zip(self.links.iter()).skip(1) {
+            l.theta = unwrap_near(l.theta, last.theta);
         }
         if self.slot.mode.shaft_turning() {
             let lever = if self.slot.mode.clutches()[0] == Clutch::Engaged {
@@ -1613,9 +1792,13 @@ fn joint_gap<T: Real>(params: &CccParams<T>, a: &[LinkState<T>; 9], b: &[LinkSta
     let mut gap = T::zero();
     for p in 1..9 {
         let len = params.link(p).length;
+        let (ua, ub) = (
+            Vec2::new(a[p].theta.cos(), a[p].theta.sin()),
+            Vec2::new(b[p].theta.cos(), b[p].theta.sin()),
+        );
         for x in [T::zero(), len, params.rocker_d] {
-            let at = |s: &LinkState<T>| s.origin + Vec2::new(s.theta.cos(), s.theta.sin()) * x;
-            gap = gap.max((at(&a[p]) - at(&b[p])).norm());
+            let gap_at = (a[p].origin + ua * x) - (b[p].origin + ub * x);
+            gap = gap.max(gap_at.norm());
         }
     }
     gap
@@ -1767,49 +1950,57 @@ fn fired<T: Real>(g0: &Guards<T>, g1: &Guards<T>) -> u8 {
 }
 
 /// Builds into `slot` the first choice of `mode`'s coordinates that assembles at `pose`
-/// well conditioned, else the best conditioned that assembles; returns its coordinates.
-/// On an error `slot` is half-built.
+/// well conditioned, else the best conditioned that assembles (`spare`: the scratch
+/// slot the others are tried in); returns its coordinates. On an error `slot` is
+/// half-built.
 fn best_slot<T: Real>(
     params: &CccParams<T>,
     mode: Mode,
     pose: &[T; 9],
     time: f64,
     slot: &mut Slot<T>,
+    spare: &mut Slot<T>,
 ) -> Result<[T; 2], TwinError> {
-    // (conditioning, choice, coordinates) of the best so far; `good`: the scan stopped
-    // on a well-conditioned choice, which `slot` therefore holds.
-    let mut best: Option<(T, Coordinates, [T; 2])> = None;
-    let mut good = false;
-    let failures = scan_choices(params, mode, pose, time, None, slot, |coords, s, q| {
+    // (conditioning, coordinates) of the best so far, which `slot` holds.
+    let mut best: Option<(T, [T; 2])> = None;
+    let failures = scan_choices(params, mode, pose, time, None, slot, spare, |s, q| {
         let cond = s.conditioning();
-        good = cond >= T::c(0.2);
-        if good || best.is_none_or(|(b, _, _)| cond > b) {
-            best = Some((cond, coords, q));
+        if cond >= T::c(0.2) {
+            best = Some((cond, q));
+            Take::KeepAndStop
+        } else if best.is_none_or(|(b, _)| cond > b) {
+            best = Some((cond, q));
+            Take::Keep
+        } else {
+            Take::No
         }
-        good
     })?;
-    let Some((_, coords, q)) = best else {
-        return Err(TwinError::Mechanism {
-            time,
-            mode,
-            failures,
-        });
-    };
-    if good {
-        Ok(q)
-    } else {
-        // Later choices (or failed attempts) overwrote the best one: build it again
-        // (the same pose, so the same bits).
-        slot.rebuild(params, mode, coords, pose, time)
-            .map_err(TwinError::Step)
-    }
+    best.map(|(_, q)| q).ok_or(TwinError::Mechanism {
+        time,
+        mode,
+        failures,
+    })
 }
 
-/// Assembles `mode` at `pose` in each of its coordinate choices but `skip`, in order,
-/// into `slot`, and hands each that assembles to `take` with its coordinates (`take`
-/// returns `true` to stop there). Returns the groups that failed in the others; an
-/// error that is not a group's (a non-finite input) ends the scan. `slot` holds the
-/// last choice tried.
+/// What [`scan_choices`] does with a coordinate choice that assembles.
+enum Take {
+    /// Drops it.
+    No,
+    /// Keeps it (the best so far) and goes on.
+    Keep,
+    /// Keeps it and ends the scan.
+    KeepAndStop,
+}
+
+/// Assembles `mode` at `pose` in each of its coordinate choices but `skip`, in order
+/// (repositioning a slot that holds the choice already, see [`Slot::reposition`]), and
+/// hands each that assembles to `take` with its coordinates. Each is built in
+/// `slot` or `spare`, whichever does not hold the choice kept last, so that no choice
+/// is built twice and no slot is copied or swapped (30 KB in f64) unless the choice
+/// kept last ends up in `spare`: then the two are swapped once at the end. Returns the
+/// groups that failed in the others; an error that is not a group's (a non-finite
+/// input) ends the scan. `slot` holds the last choice kept, if any.
+#[allow(clippy::too_many_arguments)]
 fn scan_choices<T: Real>(
     params: &CccParams<T>,
     mode: Mode,
@@ -1817,16 +2008,29 @@ fn scan_choices<T: Real>(
     time: f64,
     skip: Option<Coordinates>,
     slot: &mut Slot<T>,
-    mut take: impl FnMut(Coordinates, &Slot<T>, [T; 2]) -> bool,
+    spare: &mut Slot<T>,
+    mut take: impl FnMut(&Slot<T>, [T; 2]) -> Take,
 ) -> Result<heapless::Vec<Failure, 3>, TwinError> {
     let mut failures: heapless::Vec<Failure, 3> = heapless::Vec::new();
+    // Whether `slot` holds the choice kept last; the next is built in the other.
+    let (mut kept_in_slot, mut kept_any) = (false, false);
     for coords in mode.coordinate_choices().iter().copied() {
         if Some(coords) == skip {
             continue;
         }
-        match slot.rebuild(params, mode, coords, pose, time) {
+        let target = if kept_in_slot {
+            &mut *spare
+        } else {
+            &mut *slot
+        };
+        match target.reposition(params, mode, coords, pose, time) {
             Ok(q) => {
-                if take(coords, slot, q) {
+                let verdict = take(target, q);
+                if !matches!(verdict, Take::No) {
+                    kept_in_slot = !kept_in_slot;
+                    kept_any = true;
+                }
+                if matches!(verdict, Take::KeepAndStop) {
                     break;
                 }
             }
@@ -1840,6 +2044,9 @@ fn scan_choices<T: Real>(
             Err(e) => return Err(TwinError::Step(e)),
         }
     }
+    if !kept_in_slot && kept_any {
+        core::mem::swap(slot, spare);
+    }
     Ok(failures)
 }
 
@@ -1847,6 +2054,13 @@ fn scan_choices<T: Real>(
 fn unwrap_near<T: Real>(a: T, reference: T) -> T {
     let tau = T::two_pi();
     a + tau * ((reference - a) / tau).round()
+}
+
+/// A candidate mode whose violation from the reference model ([`Twin::screen`]) is over
+/// this is not built: its own model would find it violating too (the two differ by
+/// rounding, ~1e-12 of the scales in f64). Near 0 the built model decides.
+fn screen_margin<T: Real>() -> T {
+    T::c(1e-6).max(T::EPS * T::c(1e4))
 }
 
 /// Relative threshold on angular speeds (of the largest): whether a lever touches the
