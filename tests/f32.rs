@@ -103,9 +103,9 @@ fn same_events(a: &Run, b: &Run) -> f64 {
 }
 
 /// S2 in `f32` at h = 1e-4 s runs SPEC's full second like `f64`: the same 24 events
-/// (measured: times within 1.2e-5 s), the first breakaway at the crank's dead point
-/// (0.0666 s, within 1.4e-7 s), θ1(0.5 s) within 5.5e-5 rad, the final jam at rest, and
-/// the energy audit within 4.1e-4 of the motor work (f64: 4e-11). Before f32's
+/// (measured: times within 2.2e-5 s), the first breakaway at the crank's dead point
+/// (0.0666 s, within 1e-6 s), θ1(0.5 s) within 3.3e-4 rad, the final jam at rest, and
+/// the energy audit within 5.4e-4 of the motor work (f64: 4e-11). Before f32's
 /// thresholds were fixed it took I0 at that dead point (first breakaway 0.252 s), and
 /// with them but f64's Newton tolerance it failed at 0.1788 s.
 #[test]

@@ -67,19 +67,19 @@ const PINS: &[Pin<'static>] = &[
     Pin {
         args: "slider-crank",
         exit: 0,
-        csv: "2dd144a18f9b8e2cb3d8f241aa3673b6bb5066fb567f2a3f3d9cf4286b8a5191",
+        csv: "997332b72c282dfb34e79d6bc2a3d2bb2c79d038d61cbd1cb714f71cfb305a82",
         logs: None,
     },
     Pin {
         args: "five-bar",
         exit: 0,
-        csv: "21df5ce12eca28b9cc685fb9248bd2a591ab023787bb343b545a1452c7ec8e9c",
+        csv: "400fb07137f965879a3a9343dea8b8b2b5718be99873c5af75af6296759f1f53",
         logs: None,
     },
     Pin {
         args: "ccc-s1",
         exit: 0,
-        csv: "2b35b294a3c19ed39bacc9b680c37496abe32e71da83b9ea9fc84c59de65722b",
+        csv: "30a74b4b4845ea20b539c8c832917dc63b26dcf0ba33130993dc2ed7f7e14f15",
         logs: Some((
             "2a18d19a58b935cc5a81a088e9c456f81ad855f74a9f76a5d7ec92b8b8ba339b",
             "9a52b761f69ab666f48cadb42b788f2fabceddd39201f1066997acf316fd6238",
@@ -88,31 +88,31 @@ const PINS: &[Pin<'static>] = &[
     Pin {
         args: "ccc-s2",
         exit: 0,
-        csv: "cb1d70efbd46bd6209baa6091101e4403ef8c19863c93cf1d15cf319c2d3b44f",
+        csv: "d7e1bdaf09a6831a0af293b70c3872225b100c64e4c265bc40a0e44c44188ba3",
         logs: Some((
-            "2f46758ee53087a70973a61a9eee10a5b27fdf2a37b70c60c2c6a042024d5056",
-            "76eb19d4aaf704a87f2a7fd1d5042fc477023fcf23a9f8291b36c1b348c4cfec",
+            "d9f046d0ed4f25b7dfc2e16c56714dd64216c39ff0bd30ce870bc9a8600a7c96",
+            "62e3009b9ca70a25621eabee0329b5d0378451b9c9c83c077764bfa61c52ff86",
         )),
     },
     Pin {
         args: "ccc-s2 --ccw",
         exit: 0,
-        csv: "cfcf153a5742713cadfd608bcf5a1906bf87dc4ab25d24a950ffd67f02848b75",
+        csv: "649f1664dc5cbdf7650301d12d7988158d33630c3c116fbf9b00ea41b92cb20b",
         logs: Some((
-            "f689cf3fb2838e023d5293ff329851a8206b6c99471d635e90d7c94fc34e8454",
-            "ab8d17dcad307883ac52506ee9697d1f57a19c7185c99e0923181c325b5ad043",
+            "dcdb731141d86cf0fce3dfe6534580be4f24ba3f20966b8c6c0e0866d3898a06",
+            "3aa1755250411579667e928af794db9c8a045d73bccfd0670c1a793fa55cf8f1",
         )),
     },
     Pin {
         args: "five-bar --f32",
         exit: 0,
-        csv: "d9c1723fa7e33c29cdb84fb20b7e30799692143c27ec71a505b2b55b560aae41",
+        csv: "24aed0aa6b0a2153881bb5143c429a151f8b9520cc0ca8a7e84d4445025f806a",
         logs: None,
     },
     Pin {
         args: "ccc-s1 --f32",
         exit: 0,
-        csv: "024dcc92e288b56cc54cbf13191333b9bfaacfd9f4549c1e0339a69242279572",
+        csv: "1aae84cf101116da35d0f2131bf8d7e3ccc2af86bd01989b1953a0889562cd68",
         logs: Some((
             "2a18d19a58b935cc5a81a088e9c456f81ad855f74a9f76a5d7ec92b8b8ba339b",
             "9a52b761f69ab666f48cadb42b788f2fabceddd39201f1066997acf316fd6238",
@@ -121,10 +121,10 @@ const PINS: &[Pin<'static>] = &[
     Pin {
         args: "ccc-s2 --f32",
         exit: 0,
-        csv: "338cdf322a4d7d244b613a668380dbaaad31863af13da85adb364996e9b12a05",
+        csv: "7cf6d28851354b31a7a9b64738f91f526b3420e89015317dc475a6abfa1520e4",
         logs: Some((
-            "95079bc7b11d26f595b4ff6b2f6060ca18835ce359ff8234d5a01b8a4183461d",
-            "c577aee19c65235c3c79ee2a3605000dcb01c56fffcd8ccd6acab92a4c7bf7bb",
+            "9404aea755654916a8cb5c85cf987c3658a5eae97e6b92d76cd91e470ff1dbd3",
+            "78ed98f8a9fae434297e4977840ad3f7a0de885810d8642b8232a6561ef9d228",
         )),
     },
 ];

@@ -33,6 +33,9 @@ pub const MAX_RETRIES: usize = 2;
 /// An event is located to this fraction of the step (1e-12 s at h = 1e-4 s; f32: 8 ulps,
 /// see `Twin::locate`).
 const THETA_TOL: f64 = 1e-8;
+/// Ulps of the largest link speed by which a free lever must pass the shaft for a catch
+/// to fire (see [`Twin::guards_of`]).
+const CATCH_ULPS: f64 = 16.0;
 /// Sub-steps tried in turn when a step breaks the energy balance (see
 /// [`TwinSettings::energy_tol`]): at most 1 + 4 + 16 DP5 steps' work.
 pub const SUBSTEPS: [u32; 3] = [1, 4, 16];
@@ -911,10 +914,18 @@ impl<T: Real> Twin<T> {
         // (1e-15 N·m) must not fire a release every few steps. The event moves by
         // 1e-9 N·m / ċ_k, nothing.
         let c_tol = torque_tol(inputs.load + T::one());
+        // Likewise a catch fires when a free lever passes the shaft by more than
+        // rounding: CATCH_ULPS ulps of the largest link speed (f64: ~1e-13 rad/s, the
+        // event moves by nothing). A lever just released or just stopped with the shaft
+        // leaves it at exactly the shaft's speed, and in f32 the rounding of its speed
+        // (a sum of terms of the crank's magnitude) crossed 0 in the drive direction
+        // and fired catches that changed nothing (S2 at h = 2e-4, t = 0.02879 s).
+        let w_scale = links.iter().fold(T::one(), |m, s| m.max(s.omega.abs()));
+        let w_tol = T::EPS * T::c(CATCH_ULPS) * w_scale;
         for (k, ((_, lever), clutch)) in BRANCHES.iter().zip(mode.clutches()).enumerate() {
             let w = links.get(*lever).map_or(T::zero(), |s| s.omega);
             match clutch {
-                Clutch::Free => g[k] = Some(d * (w - shaft)),
+                Clutch::Free => g[k] = Some(d * (w - shaft) - w_tol),
                 Clutch::Locked => {
                     g[2 + k] = Some(-(c[k] + c_tol));
                     locked += c[k];
@@ -977,9 +988,14 @@ impl<T: Real> Twin<T> {
             // 1% of the bracket of an end, as before, turned the iteration into
             // bisection near convergence: every event of S2 took the 16 evaluations and
             // was located to about 1e-5 of the step, not to the tolerance.)
+            // A function exactly 0 at `lo` (f32: the shaft's speed rounds to 0.0 over a
+            // stretch of 5e-6 of the step around its stop) puts regula falsi's point on
+            // `lo` for good: the margin crept up 0.4 tol per evaluation, the bracket
+            // never closed and the event was placed at the step's end, past the lever's
+            // reversal (S2 in f32 chose I0 instead of I8 at t = 0.3073 s). Bisect then.
             let th = (lo * ghi - hi * glo) / (ghi - glo);
             let margin = tol * T::c(0.4);
-            let th = if th.finite() {
+            let th = if th.finite() && glo != T::zero() {
                 th.max(lo + margin).min(hi - margin)
             } else {
                 (lo + hi) * T::c(0.5)
