@@ -78,19 +78,7 @@ pub fn applied_forces<T: Real>(
         motor,
         ..
     } = ws;
-    f.fill(T::zero());
-    let g = model.gravity();
-    for (l, rows) in model
-        .links()
-        .iter()
-        .zip(f.as_mut_slice().chunks_exact_mut(3))
-    {
-        if let [fx, fy, _] = rows {
-            *fx = l.mass * g.x;
-            *fy = l.mass * g.y;
-        }
-    }
-    add_external_loads(model, body, applied_moment, f);
+    loads_without_motors(model, body, applied_moment, f);
     for (d, tau) in model.drives().iter().zip(motor.iter()) {
         let Some(grp) = model.groups().get(d.group as usize) else {
             continue;
@@ -109,6 +97,30 @@ pub fn applied_forces<T: Real>(
         }
     }
     Ok(())
+}
+
+/// Sets `f` to the loads other than the motors: gravity at every COG, then the model's
+/// constant loads and the caller-set moments ([`add_external_loads`]); zeros past the
+/// live rows. Shared by the equations of motion and the kinetostatics.
+pub(crate) fn loads_without_motors<T: Real>(
+    model: &Model<T>,
+    bodies: &[BodyState<T>],
+    applied_moment: &[T],
+    f: &mut SVector<T, POSE_ROWS>,
+) {
+    f.fill(T::zero());
+    let g = model.gravity();
+    for (l, rows) in model
+        .links()
+        .iter()
+        .zip(f.as_mut_slice().chunks_exact_mut(3))
+    {
+        if let [fx, fy, _] = rows {
+            *fx = l.mass * g.x;
+            *fy = l.mass * g.y;
+        }
+    }
+    add_external_loads(model, bodies, applied_moment, f);
 }
 
 /// Adds the model's constant loads and the caller-set moments (`applied_moment`, per

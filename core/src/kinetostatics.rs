@@ -17,7 +17,7 @@
 //! - any other group (the triad, a six-link Assur group) as one dense system.
 
 use crate::config::{MAX_GROUP_JOINTS, MAX_GROUP_LINKS, POSE_ROWS};
-use crate::dynamics::{add_external_loads, add_load, link_acceleration};
+use crate::dynamics::{add_load, link_acceleration, loads_without_motors};
 use crate::error::{GroupFault, StepError};
 use crate::kinematics::group_id;
 use crate::model::Model;
@@ -30,18 +30,7 @@ use nalgebra::{SMatrix, SVector, Vector3};
 /// inertia (`F - M a_G`, live rows only).
 fn free_body_loads<T: Real>(model: &Model<T>, ws: &Workspace<T>) -> SVector<T, POSE_ROWS> {
     let mut f = SVector::<T, POSE_ROWS>::zeros();
-    let g = model.gravity();
-    for (l, rows) in model
-        .links()
-        .iter()
-        .zip(f.as_mut_slice().chunks_exact_mut(3))
-    {
-        if let [fx, fy, _] = rows {
-            *fx = l.mass * g.x;
-            *fy = l.mass * g.y;
-        }
-    }
-    add_external_loads(model, &ws.body, &ws.applied_moment, &mut f);
+    loads_without_motors(model, &ws.body, &ws.applied_moment, &mut f);
     for (i, (l, rows)) in model
         .links()
         .iter()

@@ -5,7 +5,7 @@
 //! Bounded by [`NEWTON_MAX_ITER`]; warm-started from
 //! `gd.x`, the previous configuration, which keeps the assembly branch as long as the
 //! motion does not cross a singular position (checked by the sign of det W). The warm
-//! start is first moved along the group's transmission functions ([`predict`]): from
+//! start is first moved along the group's transmission functions (`predict`): from
 //! `x(q₀)` to `x(q₀) + C (q - q₀)`, whose error is second order in `q - q₀`.
 
 use super::chain::{chain_gaps, eval_terms, jacobian, position_from_terms, residual};
