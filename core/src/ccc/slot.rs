@@ -196,13 +196,13 @@ impl<T: Real> Slot<T> {
             (off - between).abs() <= ulps
         });
         let tol = T::c(1e-6).max(T::EPS * T::c(1e3));
-        let tau = T::two_pi();
         let links = self.links(params);
         parts_same
-            && links.iter().zip(pose.iter()).skip(1).all(|(l, p)| {
-                let d = l.theta - *p;
-                (d - tau * (d / tau).round()).abs() <= tol
-            })
+            && links
+                .iter()
+                .zip(pose.iter())
+                .skip(1)
+                .all(|(l, p)| (l.theta - unwrap_near(*p, l.theta)).abs() <= tol)
     }
 
     /// Assembles the slot's model at the physical angles `pose` from a fresh workspace;
@@ -249,6 +249,14 @@ impl<T: Real> Slot<T> {
                 .copied()
                 .unwrap_or(T::zero()),
         }
+    }
+
+    /// [`Slot::omega_row`] as a row over `(q̇₁, q̇₂, ω_shaft)`: lever `p`'s speed from the
+    /// coordinates' rates, the shaft's column zero (the rows of the mode choice's
+    /// constraints).
+    pub fn lever_row(&self, p: usize) -> SVector<T, 3> {
+        let [v0, v1] = self.omega_row(p);
+        SVector::<T, 3>::new(v0, v1, T::zero())
     }
 
     /// The body the shaft and the load act on (A modes), if any.
@@ -636,4 +644,10 @@ fn physical_group<T: Real>(map: &BodyMap<T>, mut group: GroupId) -> GroupId {
         s.sort_unstable();
     }
     group
+}
+
+/// `a` plus the multiple of 2π that brings it nearest `reference`.
+pub(crate) fn unwrap_near<T: Real>(a: T, reference: T) -> T {
+    let tau = T::two_pi();
+    a + tau * ((reference - a) / tau).round()
 }

@@ -14,7 +14,8 @@ use super::build::{initial_pose, BRANCHES, CRANK, ROCKER};
 use super::mode::{Clutch, Coordinates, Mode};
 use super::params::CccParams;
 use super::slot::{
-    physical, physical_energy, Equations, Inputs, LinkState, Slot, QD, STATE, W_LOAD, W_MOTOR,
+    physical, physical_energy, unwrap_near, Equations, Inputs, LinkState, Slot, QD, STATE, W_LOAD,
+    W_MOTOR,
 };
 use crate::dynamics::finish_accelerations;
 use crate::error::{GroupFault, GroupId, ModelError, StepError};
@@ -920,7 +921,7 @@ impl<T: Real> Twin<T> {
         // leaves it at exactly the shaft's speed, and in f32 the rounding of its speed
         // (a sum of terms of the crank's magnitude) crossed 0 in the drive direction
         // and fired catches that changed nothing (S2 at h = 2e-4, t = 0.02879 s).
-        let w_scale = links.iter().fold(T::one(), |m, s| m.max(s.omega.abs()));
+        let w_scale = speed_scale(links);
         let w_tol = T::EPS * T::c(CATCH_ULPS) * w_scale;
         for (k, ((_, lever), clutch)) in BRANCHES.iter().zip(mode.clutches()).enumerate() {
             let w = links.get(*lever).map_or(T::zero(), |s| s.omega);
@@ -1068,7 +1069,7 @@ impl<T: Real> Twin<T> {
         let links = self.slot.links(&self.params);
         let d = self.drive;
         let shaft = shaft_speed(from, &links);
-        let scale_w = links.iter().fold(T::one(), |m, s| m.max(s.omega.abs()));
+        let scale_w = speed_scale(&links);
         let tol_w = speed_tol::<T>() * scale_w;
         // Which levers touch the shaft (may lock or engage), and the shaft's options.
         let mut contact = [false; 2];
@@ -1152,10 +1153,6 @@ impl<T: Real> Twin<T> {
             yr[QD + 1],
             if with_shaft { shaft } else { T::zero() },
         );
-        let lever_row = |slot: &Slot<T>, lever: usize| -> SVector<T, 3> {
-            let [v0, v1] = slot.omega_row(lever);
-            SVector::<T, 3>::new(v0, v1, T::zero())
-        };
         let mut best: Option<(T, Mode)> = None;
         let mut chosen = None;
         // The state the reference's workspace was last evaluated at.
@@ -1164,7 +1161,7 @@ impl<T: Real> Twin<T> {
         let mut screened_out = false;
         self.candidates.clear();
         for (_, m) in cands.iter().copied() {
-            let rows = constraint_rows(m, with_shaft, |lever| lever_row(&self.reference, lever));
+            let rows = constraint_rows(m, with_shaft, |lever| self.reference.lever_row(lever));
             let Some((u_plus, loss)) = project(&mass, &u, &rows) else {
                 let _ = self.candidates.push((m, T::c(f64::INFINITY)));
                 continue; // rank-deficient constraints
@@ -1195,7 +1192,7 @@ impl<T: Real> Twin<T> {
                 };
                 if v.finite() {
                     let rows =
-                        constraint_rows(m, with_shaft, |lever| lever_row(&self.reference, lever));
+                        constraint_rows(m, with_shaft, |lever| self.reference.lever_row(lever));
                     if let Some((u_plus, _)) = project(&mass, &u, &rows) {
                         v = self.try_candidate(w, m, &pose, &u_plus, from, inputs, tol_w)?;
                     }
@@ -1222,8 +1219,7 @@ impl<T: Real> Twin<T> {
                     "t = {time:.6} s: no mode is consistent after {}; taking {m} (violation {v:?})",
                     kind.name()
                 );
-                let rows =
-                    constraint_rows(m, with_shaft, |lever| lever_row(&self.reference, lever));
+                let rows = constraint_rows(m, with_shaft, |lever| self.reference.lever_row(lever));
                 let (u_plus, loss) = project(&mass, &u, &rows).unwrap_or((u, T::zero()));
                 self.try_candidate(w, m, &pose, &u_plus, from, inputs, tol_w)?;
                 (m, loss, rows_mismatch(&rows, &u), false)
@@ -1446,10 +1442,7 @@ impl<T: Real> Twin<T> {
             }
         }
         let r = &self.reference;
-        let row = |lever: usize| {
-            let [v0, v1] = r.omega_row(lever);
-            SVector::<T, 3>::new(v0, v1, T::zero())
-        };
+        let row = |lever: usize| r.lever_row(lever);
         let rows = constraint_rows(m, true, row);
         // The constraints' bias terms: the same combinations of the levers' bias
         // accelerations (first component; the shaft's bias is 0).
@@ -2066,10 +2059,10 @@ fn scan_choices<T: Real>(
     Ok(failures)
 }
 
-/// `a` plus the multiple of 2π that brings it nearest `reference`.
-fn unwrap_near<T: Real>(a: T, reference: T) -> T {
-    let tau = T::two_pi();
-    a + tau * ((reference - a) / tau).round()
+/// The largest angular speed of the links (rad/s), at least 1: the scale of the
+/// speed thresholds.
+fn speed_scale<T: Real>(links: &[LinkState<T>; 9]) -> T {
+    links.iter().fold(T::one(), |m, s| m.max(s.omega.abs()))
 }
 
 /// A candidate mode whose violation from the reference model ([`Twin::screen`]) is over
