@@ -160,12 +160,20 @@ impl<T: Real> Equilibrium<T> {
             (2, 6) => self.dyad(g),
             _ => false,
         };
-        closed
-            || match links {
-                0..=2 => self.dense::<6>(g),
-                3..=4 => self.dense::<12>(g),
-                _ => self.dense::<GROUP_ROWS>(g),
-            }
+        if closed {
+            return true;
+        }
+        // Reduced sizes: 6 covers the triad (4 links, 3 outer joints), 12 the six-link
+        // group (3 outer joints); a group whose reduced system is larger is solved dense.
+        let reduced = match links {
+            0..=4 => self.reduced::<6>(g),
+            _ => self.reduced::<12>(g),
+        };
+        reduced.unwrap_or_else(|| match links {
+            0..=2 => self.dense::<6>(g),
+            3..=4 => self.dense::<12>(g),
+            _ => self.dense::<GROUP_ROWS>(g),
+        })
     }
 
     /// A one-link group with 3 unknowns (a motor element R or T): its 3 equations
@@ -264,9 +272,156 @@ impl<T: Real> Equilibrium<T> {
         true
     }
 
+    /// A group each of whose links has at most one outer joint (to an earlier body),
+    /// of 2 unknowns (the triad, the six-link Assur group), by block elimination, the
+    /// dyad's method generalized: a link with an outer joint keeps only its row
+    /// `n = w_1 × w_2` (the moment about a revolute joint) which does not see that
+    /// joint, a link without one keeps its 3 rows; these rows are as many as the inner
+    /// joints' unknowns (3 × links = 2 × joints), which they determine (a sparse system
+    /// of size `3 × links - 2 × outer joints`: 6 for the triad instead of 12, 12 for
+    /// the six-link group instead of 18). Then each outer joint from its link's
+    /// remaining rows, `W_o λ_o = -L - Σ (inner reactions' wrenches)`, by Cramer with
+    /// `n` completing `W_o`'s columns (its coefficient comes out zero to rounding).
+    /// `None` if the group is not of this shape (the dense system then solves it),
+    /// `Some(false)` if it is singular.
+    fn reduced<const N: usize>(&mut self, g: &Group<T>) -> Option<bool> {
+        let links = g.placements.len();
+        // Per joint: its link `i`'s index, its other body's (`None`: an earlier body),
+        // and its first unknown's index in `λ` and, for an inner joint, in the reduced
+        // system. Per link: its outer joint.
+        let mut on = [(0, None); MAX_GROUP_JOINTS];
+        let mut col = [(0, 0); MAX_GROUP_JOINTS];
+        let mut outer = [None; MAX_GROUP_LINKS];
+        let (mut full, mut m) = (0, 0);
+        for (k, (((jt, u), o), c)) in g
+            .joints
+            .iter()
+            .zip(&self.joints)
+            .zip(&mut on)
+            .zip(&mut col)
+            .enumerate()
+        {
+            let i = link_index(g, jt.i)?;
+            let j = link_index(g, jt.j);
+            *o = (i, j);
+            *c = (full, m);
+            full += u.n;
+            match j {
+                Some(j) if j == i => return None,
+                Some(_) => m += u.n,
+                None if u.n == 2 => {
+                    if outer.get_mut(i)?.replace(k).is_some() {
+                        return None;
+                    }
+                }
+                None => return None,
+            }
+        }
+        // Per link: its first reduced row, and the rows it keeps: `n` for a link with an
+        // outer joint (with that joint's wrench columns `W_o`), else its 3 rows.
+        let mut proj = [(0, None); MAX_GROUP_LINKS];
+        let mut rows = 0;
+        for ((pr, o), cog) in proj.iter_mut().zip(&outer).zip(&self.cog).take(links) {
+            let w = o.and_then(|o| self.joints.get(o)).map(|u| {
+                let w = u.wrenches(*cog);
+                (w, w[0].cross(&w[1]))
+            });
+            *pr = (rows, w);
+            rows += if w.is_some() { 1 } else { 3 };
+        }
+        if rows != m || m > N {
+            return None;
+        }
+        // `A x = b`: per link's kept rows, `-L` and the inner joints' wrench columns
+        // (`+W` on the joint's link `i`, `-W` on the other).
+        let mut a = [[T::zero(); N]; N];
+        let mut b = [T::zero(); N];
+        let mut put = |r0: usize, n: Option<&Vector3<T>>, v: &Vector3<T>, col: usize| {
+            let entries = match n {
+                Some(n) => [(r0, n.dot(v)), (N, T::zero()), (N, T::zero())],
+                None => [(r0, v.x), (r0 + 1, v.y), (r0 + 2, v.z)],
+            };
+            for (r, e) in entries {
+                if let Some(x) = a.get_mut(r).and_then(|row| row.get_mut(col)) {
+                    *x += e;
+                }
+            }
+        };
+        for ((r0, w), load) in proj.iter().zip(&self.load).take(links) {
+            let nl = -*load;
+            let entries = match w {
+                Some((_, n)) => [(*r0, n.dot(&nl)), (N, T::zero()), (N, T::zero())],
+                None => [(*r0, nl.x), (r0 + 1, nl.y), (r0 + 2, nl.z)],
+            };
+            for (r, e) in entries {
+                if let Some(x) = b.get_mut(r) {
+                    *x = e;
+                }
+            }
+        }
+        for ((u, (i, j)), (_, c0)) in self.joints.iter().zip(&on).zip(&col).take(g.joints.len()) {
+            let Some(j) = j else {
+                continue;
+            };
+            for (link, neg) in [(*i, false), (*j, true)] {
+                let (Some((r0, w)), Some(cog)) = (proj.get(link), self.cog.get(link)) else {
+                    continue;
+                };
+                let n = w.as_ref().map(|(_, n)| n);
+                for (c, v) in u.wrenches(*cog).iter().take(u.n).enumerate() {
+                    let v = if neg { -*v } else { *v };
+                    put(*r0, n, &v, c0 + c);
+                }
+            }
+        }
+        if !crate::linalg::solve_rows(&mut a, &mut b, m) {
+            return Some(false);
+        }
+        // The inner joints' unknowns, and their wrenches on each link with an outer
+        // joint into that link's right-hand side `-L - Σ ±W λ`.
+        let mut rhs = [Vector3::zeros(); MAX_GROUP_LINKS];
+        for (r, l) in rhs.iter_mut().zip(&self.load) {
+            *r = -*l;
+        }
+        for ((u, (i, j)), (f0, c0)) in self.joints.iter().zip(&on).zip(&col).take(g.joints.len()) {
+            let Some(j) = j else {
+                continue;
+            };
+            let x = b.get(*c0..c0 + u.n).unwrap_or(&[]);
+            for (o, v) in self.lam.iter_mut().skip(*f0).zip(x) {
+                *o = *v;
+            }
+            let r = u.reaction(x);
+            for (link, sign) in [(*i, T::one()), (*j, -T::one())] {
+                let (Some((_, Some(_))), Some(cog), Some(rl)) =
+                    (proj.get(link), self.cog.get(link), rhs.get_mut(link))
+                else {
+                    continue;
+                };
+                let f = r.force * sign;
+                let mom = (r.moment + cross(&(u.at - *cog), &r.force)) * sign;
+                *rl -= Vector3::new(f.x, f.y, mom);
+            }
+        }
+        for ((o, (_, w)), rl) in outer.iter().zip(&proj).zip(&rhs).take(links) {
+            let (Some(k), Some((wo, n))) = (o, w) else {
+                continue;
+            };
+            let Some((f0, _)) = col.get(*k) else {
+                continue;
+            };
+            let [x, y, _] = cramer(&[wo[0], wo[1], *n], rl);
+            for (o, v) in self.lam.iter_mut().skip(*f0).zip([x, y]) {
+                *o = v;
+            }
+        }
+        Some(true)
+    }
+
     /// Any group: its equilibrium `A λ = b` as one dense system (size `N = 3 × links`,
     /// padded with identity), by Gaussian elimination with partial pivoting; `false`
     /// if it is singular.
+    #[inline(never)]
     fn dense<const N: usize>(&mut self, g: &Group<T>) -> bool {
         let mut a = SMatrix::<T, N, N>::identity();
         let mut b = SVector::<T, N>::zeros();

@@ -88,18 +88,18 @@ const PINS: &[Pin<'static>] = &[
     Pin {
         args: "ccc-s2",
         exit: 0,
-        csv: "d7e1bdaf09a6831a0af293b70c3872225b100c64e4c265bc40a0e44c44188ba3",
+        csv: "a185987fee3adea866ce9f527e1ae803f99925635cd7116429301758061b7ad1",
         logs: Some((
-            "d9f046d0ed4f25b7dfc2e16c56714dd64216c39ff0bd30ce870bc9a8600a7c96",
-            "62e3009b9ca70a25621eabee0329b5d0378451b9c9c83c077764bfa61c52ff86",
+            "154535e442399f88957f4b9a874d27415029bc3ac4811d4c20b7fffb05d09470",
+            "8ba21f9f934415e0172fd2e94c2c0657d13f5d8c5168b818719766ed18e2d8f4",
         )),
     },
     Pin {
         args: "ccc-s2 --ccw",
         exit: 0,
-        csv: "649f1664dc5cbdf7650301d12d7988158d33630c3c116fbf9b00ea41b92cb20b",
+        csv: "319dcedf5983deda429fcee990ce5c7dca41d77fff2fdd77ce8d033a821ad900",
         logs: Some((
-            "dcdb731141d86cf0fce3dfe6534580be4f24ba3f20966b8c6c0e0866d3898a06",
+            "63403dc942603ed8cae332fd97df005650d73252d3d29fa5669745db3b456452",
             "3aa1755250411579667e928af794db9c8a045d73bccfd0670c1a793fa55cf8f1",
         )),
     },
@@ -121,10 +121,10 @@ const PINS: &[Pin<'static>] = &[
     Pin {
         args: "ccc-s2 --f32",
         exit: 0,
-        csv: "7cf6d28851354b31a7a9b64738f91f526b3420e89015317dc475a6abfa1520e4",
+        csv: "89110fcdea974d2cbb1320923798670c77e5bd5a9b82c986bd2ef627336a28c3",
         logs: Some((
-            "9404aea755654916a8cb5c85cf987c3658a5eae97e6b92d76cd91e470ff1dbd3",
-            "78ed98f8a9fae434297e4977840ad3f7a0de885810d8642b8232a6561ef9d228",
+            "44560ce1cba6a2a1b9b1824744ed118a2617ad3435965cce8ad374742372d1d5",
+            "6cd8cb6d8a19151b0951677015f1da24cc5e189051c8e6ce30132860ba85f64e",
         )),
     },
 ];
