@@ -88,18 +88,18 @@ const PINS: &[Pin<'static>] = &[
     Pin {
         args: "ccc-s2",
         exit: 0,
-        csv: "a185987fee3adea866ce9f527e1ae803f99925635cd7116429301758061b7ad1",
+        csv: "9deef758239cb86c3e99bed0e560919cec8f835abc1cf7cb740a7c65912ac3f3",
         logs: Some((
-            "154535e442399f88957f4b9a874d27415029bc3ac4811d4c20b7fffb05d09470",
+            "059fb60b5e4f1b2c004917ec090a63711efe2eddb9e1003c881e7681d8b37b79",
             "8ba21f9f934415e0172fd2e94c2c0657d13f5d8c5168b818719766ed18e2d8f4",
         )),
     },
     Pin {
         args: "ccc-s2 --ccw",
         exit: 0,
-        csv: "319dcedf5983deda429fcee990ce5c7dca41d77fff2fdd77ce8d033a821ad900",
+        csv: "6feb678829c9d60e4bea5847c354975584a0fca08456e9017356f3505ba6aab7",
         logs: Some((
-            "63403dc942603ed8cae332fd97df005650d73252d3d29fa5669745db3b456452",
+            "1c57d6e7932f2b8077d66ae5abbf93582230ff57fb6ac6e0aed5dc61b68f0289",
             "3aa1755250411579667e928af794db9c8a045d73bccfd0670c1a793fa55cf8f1",
         )),
     },
@@ -121,9 +121,9 @@ const PINS: &[Pin<'static>] = &[
     Pin {
         args: "ccc-s2 --f32",
         exit: 0,
-        csv: "89110fcdea974d2cbb1320923798670c77e5bd5a9b82c986bd2ef627336a28c3",
+        csv: "868a451cc67445691da4303cad5fad3e5cd7d7e74ac69ed6e9d38661f01efb2b",
         logs: Some((
-            "44560ce1cba6a2a1b9b1824744ed118a2617ad3435965cce8ad374742372d1d5",
+            "1747bcc66fac0af3a32ee901eac5c05fda9f365b355aa83eee11314b9b1c2dad",
             "6cd8cb6d8a19151b0951677015f1da24cc5e189051c8e6ce30132860ba85f64e",
         )),
     },
