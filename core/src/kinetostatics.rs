@@ -37,7 +37,7 @@ fn free_body_loads<T: Real>(model: &Model<T>, ws: &Workspace<T>) -> SVector<T, P
         .zip(f.as_mut_slice().chunks_exact_mut(3))
         .enumerate()
     {
-        let acc = link_acceleration(ws, i as u8 + 1);
+        let acc = link_acceleration(ws, model.dof(), i as u8 + 1);
         for ((e, m), a) in rows.iter_mut().zip([l.mass, l.mass, l.inertia]).zip(acc) {
             *e -= m * a;
         }
