@@ -14,7 +14,11 @@
 //!   2 unknowns each) in closed form: each link's moment equation about its outer joint
 //!   gives the middle joint's reaction (a 2 × 2 system), then each link's remaining
 //!   equations its outer joint's;
-//! - any other group (the triad, a six-link Assur group) as one dense system.
+//! - a group whose links each have at most one outer joint (the triad, the six-link
+//!   Assur group) by block elimination, the dyad's method generalized (see
+//!   `Equilibrium::reduced`): a small sparse system in the inner joints' unknowns
+//!   (6 for the triad, 8 for the six-link group), then back-substitution;
+//! - any other group as one dense system.
 
 use crate::config::{MAX_BODIES, MAX_GROUP_JOINTS, MAX_GROUP_LINKS, POSE_ROWS};
 use crate::dynamics::{add_load, link_acceleration, loads_without_motors};
