@@ -147,3 +147,85 @@ pub fn invert<T: Real, const N: usize>(
     let at = |r: usize, c: usize| inv.get(r).and_then(|row| row.get(c)).copied();
     Some((SMatrix::from_fn(|r, c| at(r, c).unwrap_or(T::zero())), det))
 }
+
+/// Swaps entries `k < p` of `s` (rows of a row-major matrix, or of a vector); nothing
+/// if either is out of range (no panic path: slice `swap` asserts its indices).
+fn swap_entries<X>(s: &mut [X], k: usize, p: usize) {
+    if let Some((lo, hi)) = s.split_at_mut_checked(p) {
+        if let (Some(x), Some(y)) = (lo.get_mut(k), hi.first_mut()) {
+            core::mem::swap(x, y);
+        }
+    }
+}
+
+/// Solves the top-left `n × n` block of `A x = b` (`a` row-major, `n ≤ N`) in place,
+/// `x` into `b`, by Gaussian elimination with partial pivoting: the same elimination as
+/// [`solve`], on plain arrays walked by iterators (no per-entry index checks), and
+/// rows whose entry in the pivot column is zero are left alone, so a sparse system
+/// (a group's reduced equilibrium: each row sees one or two joints) costs little more
+/// than its fill-in. `false` if a pivot vanishes or is not finite. Bounded work:
+/// `n³/3` multiply-adds at most, no iteration.
+pub fn solve_rows<T: Real, const N: usize>(a: &mut [[T; N]; N], b: &mut [T; N], n: usize) -> bool {
+    let n = n.min(N);
+    for k in 0..n {
+        let mut p = k;
+        let mut best = T::zero();
+        for (r, row) in (k..).zip(a.get(k..n).unwrap_or(&[])) {
+            let v = row.get(k).map_or(T::zero(), |v| v.abs());
+            if v > best {
+                best = v;
+                p = r;
+            }
+        }
+        if !(best > T::zero() && best.finite()) {
+            return false;
+        }
+        if p != k {
+            swap_entries(a, k, p);
+            swap_entries(b, k, p);
+        }
+        let (Some((head, tail)), Some((bh, bt))) =
+            (a.split_at_mut_checked(k + 1), b.split_at_mut_checked(k + 1))
+        else {
+            return false;
+        };
+        let (Some(prow), Some(bk)) = (head.last(), bh.last()) else {
+            return false;
+        };
+        let (Some(piv), Some(right)) = (prow.get(k).copied(), prow.get(k + 1..n)) else {
+            return false;
+        };
+        let rows = tail.get_mut(..n - k - 1).unwrap_or(&mut []);
+        for (row, br) in rows.iter_mut().zip(bt.iter_mut()) {
+            let Some(rk) = row.get(k).copied().filter(|v| *v != T::zero()) else {
+                continue;
+            };
+            let f = rk / piv;
+            // Column k itself is not read again: only the columns right of it.
+            for (x, y) in row
+                .get_mut(k + 1..n)
+                .unwrap_or(&mut [])
+                .iter_mut()
+                .zip(right)
+            {
+                *x -= f * *y;
+            }
+            *br -= f * *bk;
+        }
+    }
+    for k in (0..n).rev() {
+        let (Some(row), Some((bh, bt))) = (a.get(k), b.split_at_mut_checked(k + 1)) else {
+            return false;
+        };
+        let (Some(bk), Some(d), Some(right)) = (bh.last_mut(), row.get(k), row.get(k + 1..n))
+        else {
+            return false;
+        };
+        let mut s = *bk;
+        for (x, v) in right.iter().zip(bt.iter()) {
+            s -= *x * *v;
+        }
+        *bk = s / *d;
+    }
+    true
+}
