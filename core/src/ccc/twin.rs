@@ -412,9 +412,12 @@ pub struct Twin<T: Real> {
     settings: TwinSettings<T>,
     drive: T,
     slot: Slot<T>,
-    cand: Slot<T>,
+    /// The backup slot and the candidate slot (see [`Twin::scratch`]), which is which
+    /// set by `backup_at` ([`spare_roles`]): the mode choice hands the backup's role to
+    /// the slot that holds its pick by flipping it, not by swapping 30 KB.
+    spares: [Slot<T>; 2],
+    backup_at: u8,
     reference: Slot<T>,
-    backup: Slot<T>,
     dp5: Dp5<T, STATE>,
     y: SVector<T, STATE>,
     t: T,
@@ -515,9 +518,9 @@ impl<T: Real> Twin<T> {
             drive: params.drive.sign(),
             params,
             settings,
-            cand: spare,
+            spares: [slot.clone(), spare],
+            backup_at: 0,
             reference: slot.clone(),
-            backup: slot.clone(),
             slot,
             dp5: Dp5::new(),
             y,
@@ -833,12 +836,8 @@ impl<T: Real> Twin<T> {
     /// [`Twin::take_candidate`] keeps the pre-step slot as the backup with one swap, no
     /// copy (a slot is 30 KB in f64).
     fn scratch(&mut self, switched: bool) -> (&mut Slot<T>, &CccParams<T>) {
-        let slot = if switched {
-            &mut self.cand
-        } else {
-            &mut self.backup
-        };
-        (slot, &self.params)
+        let (backup, cand) = spare_roles(&mut self.spares, self.backup_at);
+        (if switched { cand } else { backup }, &self.params)
     }
 
     /// The slot a candidate is built in: the scratch ([`Twin::scratch`]), or with
@@ -846,7 +845,10 @@ impl<T: Real> Twin<T> {
     /// candidate slot, the other one free then.
     fn build_slot(&mut self, switched: bool, second: bool) -> (&mut Slot<T>, &CccParams<T>) {
         if second && !switched {
-            (&mut self.cand, &self.params)
+            (
+                spare_roles(&mut self.spares, self.backup_at).1,
+                &self.params,
+            )
         } else {
             self.scratch(switched)
         }
@@ -856,10 +858,11 @@ impl<T: Real> Twin<T> {
     /// coordinates, the current one; the first time in a step the pre-step slot goes
     /// to the backup.
     fn take_candidate(&mut self, w: &mut Work<T>) {
+        let (backup, cand) = spare_roles(&mut self.spares, self.backup_at);
         if w.switched {
-            core::mem::swap(&mut self.slot, &mut self.cand);
+            core::mem::swap(&mut self.slot, cand);
         } else {
-            core::mem::swap(&mut self.slot, &mut self.backup);
+            core::mem::swap(&mut self.slot, backup);
             w.switched = true;
         }
     }
@@ -872,7 +875,10 @@ impl<T: Real> Twin<T> {
         saved: &[[T; crate::config::MAX_GROUP_VARS]; crate::config::MAX_GROUPS],
     ) {
         if switched {
-            core::mem::swap(&mut self.slot, &mut self.backup);
+            core::mem::swap(
+                &mut self.slot,
+                spare_roles(&mut self.spares, self.backup_at).0,
+            );
         }
         self.set_group_unknowns(saved);
         self.dp5.invalidate();
@@ -1245,7 +1251,7 @@ impl<T: Real> Twin<T> {
             &pose,
             time,
             &mut self.reference,
-            &mut self.cand,
+            spare_roles(&mut self.spares, self.backup_at).1,
         )?;
         let mut yr = SVector::<T, STATE>::zeros();
         for k in 0..2 {
@@ -1481,8 +1487,10 @@ impl<T: Real> Twin<T> {
             (Some((_, _, gap)), Some(second)) => {
                 self.speed_gap = gap;
                 if second {
-                    // The candidate goes where `take_candidate` takes it from.
-                    core::mem::swap(&mut self.backup, &mut self.cand);
+                    // The candidate slot becomes the scratch, where `take_candidate`
+                    // takes the pick from (the other slot, free, becomes the candidate
+                    // slot): a flip of roles, no copy.
+                    self.backup_at ^= 1;
                 }
                 true
             }
@@ -1731,11 +1739,8 @@ impl<T: Real> Twin<T> {
         // another choice is taken only if it beats `now` by 1.5.
         let skip = Some(self.slot.coords);
         // The reference slot is the spare: the mode choice builds it again.
-        let scratch = if w.switched {
-            &mut self.cand
-        } else {
-            &mut self.backup
-        };
+        let (backup, cand) = spare_roles(&mut self.spares, self.backup_at);
+        let scratch = if w.switched { cand } else { backup };
         let mut failures = scan_choices(
             &self.params,
             mode,
@@ -2197,6 +2202,17 @@ fn bracketed_root<T: Real>(p: impl Fn(T) -> (T, T), g0: T, g1: T, tol: T) -> Opt
         }
     }
     th.finite().then_some(th)
+}
+
+/// The twin's spare slots as `(backup, candidate)`: `backup_at` says which of the two
+/// is the backup.
+fn spare_roles<T: Real>(spares: &mut [Slot<T>; 2], backup_at: u8) -> (&mut Slot<T>, &mut Slot<T>) {
+    let [a, b] = spares;
+    if backup_at == 0 {
+        (a, b)
+    } else {
+        (b, a)
+    }
 }
 
 /// Which of the event functions went from ≤ 0 to > 0 (bit k: function k).
