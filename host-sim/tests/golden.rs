@@ -88,19 +88,19 @@ const PINS: &[Pin<'static>] = &[
     Pin {
         args: "ccc-s2",
         exit: 0,
-        csv: "a803370b5062e651b473316585fb5d854609cc9f4994d869d66e9435f7dce96b",
+        csv: "acfe97d434ad34a4d9c51f5c63ed1be7550053d29c75e120a5edce553f514737",
         logs: Some((
-            "167adb74240beb40e2d5594406a40895d4cf81d282af5aed6c842927cd49a0f1",
-            "e14c0666ef0dcc16aeef146a246e6fc646c2129d3b20ac2bedd829d3b3981aaa",
+            "04b9e5cc80fd8eface79253afa3c57ed6724165444535588ca053c368996dae8",
+            "4094b4d965635a6730dbfa8aca3851e218aeedb360a03e3450d85373f01f4dcd",
         )),
     },
     Pin {
         args: "ccc-s2 --ccw",
         exit: 0,
-        csv: "015e061670b8c0e23f6334bb77189162c679dd90e5ad4c27faa4e73f710fb94e",
+        csv: "917014f3596465f2b07af49ae91327ca14ea2552d96fb6a2244c581f18c51fc2",
         logs: Some((
-            "46d9b1057c592fcdbd617a879c37a930778e2a4a5c8a5c038b473a7d473a7d51",
-            "38e01b6d505d3109c8a58c1ec7abd94b3a43393ef1d1b6d7604425afcdbce385",
+            "1d042917154c4a10f11922ae5a9843390e4a3804df66ba833ccc1d5d84808a2d",
+            "b23ff2cec9e3a6950388edcae36b13d456bc997ac174a7f3bbb7aab62e0bd1d5",
         )),
     },
     Pin {
@@ -121,10 +121,10 @@ const PINS: &[Pin<'static>] = &[
     Pin {
         args: "ccc-s2 --f32",
         exit: 0,
-        csv: "a470f5609d385267942b42c84f1cf10a240e5aa378979e8447d62579240e1898",
+        csv: "67a04b1e7c035c99f3ea03b20cfdd50da241e1dcad0d11620f51b3b04bf2c56d",
         logs: Some((
-            "b743d48c3b93e9a2ad1e01ab1e25bbdc4dca57eaf477238cd6876ee0dd620e24",
-            "36d8a3e6195d115d4fb751852a762c5f9bf890006044b376a873c1973fe85948",
+            "c532a25a55bbc33bac968644972eb9192fe0c7af46ee49531600131bd3b0e80d",
+            "8d59d24a92d70cb96f6ed53b67bba3520b68a44e8e160a9b308139bdaec8d667",
         )),
     },
 ];
