@@ -111,7 +111,23 @@ fn five<T: Real>(steps: u32) -> Result<T, String> {
     Ok(sim.q()[0])
 }
 
+struct Logger;
+impl log::Log for Logger {
+    fn enabled(&self, _: &log::Metadata) -> bool {
+        true
+    }
+    fn log(&self, r: &log::Record) {
+        println!("  {}: {}", r.level(), r.args());
+    }
+    fn flush(&self) {}
+}
+static LOGGER: Logger = Logger;
+
 fn main() -> ExitCode {
+    if std::env::var_os("STEPS_LOG").is_some() {
+        let _ = log::set_logger(&LOGGER);
+        log::set_max_level(log::LevelFilter::Debug);
+    }
     let args: Vec<String> = std::env::args().skip(1).collect();
     let (Some(work), Some(Ok(steps))) = (args.first(), args.get(1).map(|n| n.parse::<u32>()))
     else {

@@ -137,27 +137,35 @@ pub(crate) fn add_external_loads<T: Real>(
         let at = b.o + rotate_cs(b.c, b.s, &ld.point);
         add_load(model, bodies, f, ld.body, at, ld.force, ld.moment);
     }
-    let moments = f.as_mut_slice().iter_mut().skip(2).step_by(3);
-    for (e, m) in moments.zip(applied_moment.iter().skip(1).take(model.n_links())) {
-        *e += *m;
+    let rows = f.as_mut_slice().chunks_exact_mut(3);
+    for (row, m) in rows.zip(applied_moment.iter().skip(1).take(model.n_links())) {
+        if let [_, _, e] = row {
+            *e += *m;
+        }
     }
 }
 
 /// The actual pose-space accelerations `a_G = a_b + V q̈` of link `body` (its COG's
-/// acceleration and its angular acceleration) at the workspace's `q̈`.
-pub(crate) fn link_acceleration<T: Real>(ws: &Workspace<T>, body: u8) -> [T; 3] {
+/// acceleration and its angular acceleration) at the workspace's `q̈`, over the
+/// model's `dof` coordinates (`q̈` is zero past them: the same sums, bit for bit).
+pub(crate) fn link_acceleration<T: Real>(ws: &Workspace<T>, dof: usize, body: u8) -> [T; 3] {
     let r = 3 * (body as usize).saturating_sub(1);
-    let v = ws.v.as_slice();
-    let ab = ws.a_bias.as_slice();
-    core::array::from_fn(|c| {
-        let mut vq = T::zero();
-        for (j, q) in ws.qdd.iter().enumerate() {
-            if let Some(v) = v.get(j * POSE_ROWS + r + c) {
-                vq += *v * *q;
-            }
+    let mut vq = [T::zero(); 3];
+    for (j, q) in ws.qdd.iter().enumerate().take(dof) {
+        let at = j * POSE_ROWS + r;
+        for (s, v) in vq
+            .iter_mut()
+            .zip(ws.v.as_slice().get(at..at + 3).unwrap_or(&[]))
+        {
+            *s += *v * *q;
         }
-        ab.get(r + c).copied().unwrap_or(T::zero()) + vq
-    })
+    }
+    let ab = ws.a_bias.as_slice().get(r..r + 3).unwrap_or(&[]);
+    let mut a = [T::zero(); 3];
+    for ((a, b), s) in a.iter_mut().zip(ab).zip(vq) {
+        *a = *b + s;
+    }
+    a
 }
 
 /// Forward dynamics at `(t, q, q̇)`: kinematics, `V`, `a_b`, `F`, `VᵀMV`, `q̈`. Leaves
@@ -318,7 +326,7 @@ pub fn solve_accelerations<T: Real>(
 /// (`a_G = a_b + V q̈`) and every group's `ẍ = ẍ_b + C q̈`.
 pub fn finish_accelerations<T: Real>(model: &Model<T>, ws: &mut Workspace<T>) {
     for (i, l) in model.links().iter().enumerate() {
-        let [ax, ay, al] = link_acceleration(ws, i as u8 + 1);
+        let [ax, ay, al] = link_acceleration(ws, model.dof(), i as u8 + 1);
         let Some(b) = ws.body.get_mut(i + 1) else {
             continue;
         };

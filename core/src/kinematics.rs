@@ -6,8 +6,8 @@ use crate::error::{GroupFault, GroupId, StepError};
 use crate::model::Model;
 use crate::scalar::Real;
 use crate::structomat::{
-    acceleration_pass, dyad_rrr, dyad_rrt, dyad_rtr, newton, position_from_x, velocity_pass, Base,
-    Group, GroupData, GroupKind, Term,
+    acceleration_pass, dyad_rrr, dyad_rrt, dyad_rtr, motor_r, newton, position_from_x,
+    velocity_pass, Base, Group, GroupData, GroupKind, Term,
 };
 use crate::workspace::{BodyState, Workspace};
 
@@ -48,14 +48,14 @@ fn solve_group<T: Real>(
     q: &[T],
 ) -> Result<T, GroupFault> {
     match g.kind {
-        GroupKind::MotorR | GroupKind::MotorT => {}
-        GroupKind::Rrr => dyad_rrr::solve(g, gd, model, bodies)?,
+        // Linear loop closures (TRT, RTT): one Newton step from anywhere is exact.
+        k if k.solved_by_newton() => return newton::solve(g, gd, model, bodies, q),
+        // The RRR dyad factors W and places its links itself (closed forms).
+        GroupKind::Rrr => return dyad_rrr::solve(g, gd, model, bodies, model.singular_tol()),
+        GroupKind::MotorR => return motor_r::position(g, gd, model, bodies, q),
         GroupKind::Rrt => dyad_rrt::solve(g, gd, model, bodies)?,
         GroupKind::Rtr => dyad_rtr::solve(g, gd, model, bodies)?,
-        // Linear loop closures (TRT, RTT): one Newton step from anywhere is exact.
-        GroupKind::Trt | GroupKind::Rtt | GroupKind::Triad | GroupKind::Assur => {
-            return newton::solve(g, gd, model, bodies, q)
-        }
+        _ => {}
     }
     position_from_x(g, gd, model, bodies, q)
 }

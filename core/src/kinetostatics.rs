@@ -14,9 +14,13 @@
 //!   2 unknowns each) in closed form: each link's moment equation about its outer joint
 //!   gives the middle joint's reaction (a 2 × 2 system), then each link's remaining
 //!   equations its outer joint's;
-//! - any other group (the triad, a six-link Assur group) as one dense system.
+//! - a group whose links each have at most one outer joint (the triad, the six-link
+//!   Assur group) by block elimination, the dyad's method generalized (see
+//!   `Equilibrium::reduced`): a small sparse system in the inner joints' unknowns
+//!   (6 for the triad, 8 for the six-link group), then back-substitution;
+//! - any other group as one dense system.
 
-use crate::config::{MAX_GROUP_JOINTS, MAX_GROUP_LINKS, POSE_ROWS};
+use crate::config::{MAX_BODIES, MAX_GROUP_JOINTS, MAX_GROUP_LINKS, POSE_ROWS};
 use crate::dynamics::{add_load, link_acceleration, loads_without_motors};
 use crate::error::{GroupFault, StepError};
 use crate::kinematics::group_id;
@@ -37,7 +41,7 @@ fn free_body_loads<T: Real>(model: &Model<T>, ws: &Workspace<T>) -> SVector<T, P
         .zip(f.as_mut_slice().chunks_exact_mut(3))
         .enumerate()
     {
-        let acc = link_acceleration(ws, i as u8 + 1);
+        let acc = link_acceleration(ws, model.dof(), i as u8 + 1);
         for ((e, m), a) in rows.iter_mut().zip([l.mass, l.mass, l.inertia]).zip(acc) {
             *e -= m * a;
         }
@@ -105,6 +109,8 @@ impl<T: Real> Unknowns<T> {
 /// the group's order) its unknowns, and the solution `λ` (a joint's unknowns
 /// consecutive). One is set up and solved per group, reusing the buffers.
 struct Equilibrium<T: Real> {
+    /// Per body, its placement index in the group ([`NOT_IN_GROUP`] for the others).
+    link: [u8; MAX_BODIES],
     cog: [Vec2<T>; MAX_GROUP_LINKS],
     load: [Vector3<T>; MAX_GROUP_LINKS],
     joints: [Unknowns<T>; MAX_GROUP_JOINTS],
@@ -119,11 +125,20 @@ impl<T: Real> Equilibrium<T> {
             n: 0,
         };
         Self {
+            link: [NOT_IN_GROUP; MAX_BODIES],
             cog: [Vec2::zeros(); MAX_GROUP_LINKS],
             load: [Vector3::zeros(); MAX_GROUP_LINKS],
             joints: [none; MAX_GROUP_JOINTS],
             lam: [T::zero(); GROUP_ROWS],
         }
+    }
+
+    /// The placement index of `body` in the group, if it is one of its links.
+    fn link_of(&self, body: u8) -> Option<usize> {
+        self.link
+            .get(body as usize)
+            .filter(|k| **k != NOT_IN_GROUP)
+            .map(|k| *k as usize)
     }
 
     /// Sets up group `g`'s equilibrium at the workspace's pose under `loads`.
@@ -134,7 +149,17 @@ impl<T: Real> Equilibrium<T> {
         g: &Group<T>,
         loads: &SVector<T, POSE_ROWS>,
     ) {
-        for ((p, c), l) in g.placements.iter().zip(&mut self.cog).zip(&mut self.load) {
+        self.link = [NOT_IN_GROUP; MAX_BODIES];
+        for (k, ((p, c), l)) in g
+            .placements
+            .iter()
+            .zip(&mut self.cog)
+            .zip(&mut self.load)
+            .enumerate()
+        {
+            if let Some(e) = self.link.get_mut(p.link as usize) {
+                *e = k as u8;
+            }
             *c = ws.cog(model, p.link);
             let r = 3 * (p.link as usize).saturating_sub(1);
             if let Some([fx, fy, m]) = loads.as_slice().get(r..r + 3) {
@@ -160,12 +185,21 @@ impl<T: Real> Equilibrium<T> {
             (2, 6) => self.dyad(g),
             _ => false,
         };
-        closed
-            || match links {
-                0..=2 => self.dense::<6>(g),
-                3..=4 => self.dense::<12>(g),
-                _ => self.dense::<GROUP_ROWS>(g),
-            }
+        if closed {
+            return true;
+        }
+        // Reduced sizes: 6 covers the triad (4 links, 3 outer joints), 8 the six-link
+        // group (3 outer joints, 2 rods); a group whose reduced system is larger is
+        // solved dense.
+        let reduced = match links {
+            0..=4 => self.reduced::<6>(g),
+            _ => self.reduced::<8>(g),
+        };
+        reduced.unwrap_or_else(|| match links {
+            0..=2 => self.dense::<6>(g),
+            3..=4 => self.dense::<12>(g),
+            _ => self.dense::<GROUP_ROWS>(g),
+        })
     }
 
     /// A one-link group with 3 unknowns (a motor element R or T): its 3 equations
@@ -264,9 +298,311 @@ impl<T: Real> Equilibrium<T> {
         true
     }
 
+    /// A group each of whose links has at most one outer joint (to an earlier body),
+    /// of 2 unknowns (the triad, the six-link Assur group), by block elimination, the
+    /// dyad's method generalized. Each link `p` may eliminate one joint `e` of 2
+    /// unknowns from its equilibrium `W_e λ_e + Σ_k W_k λ_k = -L`: its outer joint,
+    /// or, for a link without one that has exactly two joints (a rod), one of them.
+    /// It keeps only the row `n = w_e1 × w_e2`, which does not see `e` (the moment
+    /// about a revolute joint), and its other rows give `λ_e` by Cramer with `n`
+    /// completing `W_e`'s columns (`n`'s coefficient comes out zero to rounding): for a
+    /// rod, `λ_e = β + K λ_a` in its other joint `a`'s unknowns, substituted into the
+    /// equilibrium of `e`'s other link. A link that eliminates nothing keeps its 3
+    /// rows. The kept rows (3 × links - 2 × eliminated joints) determine the other
+    /// inner joints' unknowns as a small sparse system: 6 for the triad instead of 12,
+    /// 8 for the six-link group instead of 18. Then the rods' joints, then the outer
+    /// joints, `W_o λ_o = -L - Σ (the inner reactions' wrenches)`. `None` if the group
+    /// is not of this shape (the dense system then solves it), `Some(false)` if it is
+    /// singular.
+    #[inline(never)]
+    fn reduced<const N: usize>(&mut self, g: &Group<T>) -> Option<bool> {
+        let links = g.placements.len();
+        let nj = g.joints.len();
+        // Per joint: its link `i`'s index, its other body's (`None`: an earlier body),
+        // its first unknown's index in `λ`. Per link: its outer joint, and the inner
+        // joints on it (how many, the first two).
+        let mut on = [(0, None); MAX_GROUP_JOINTS];
+        let mut first = [0; MAX_GROUP_JOINTS];
+        let mut outer = [None; MAX_GROUP_LINKS];
+        let mut touch = [(0, [0; 2]); MAX_GROUP_LINKS];
+        let mut full = 0;
+        for (k, ((jt, u), (o, f))) in g
+            .joints
+            .iter()
+            .zip(&self.joints)
+            .zip(on.iter_mut().zip(&mut first))
+            .enumerate()
+        {
+            let i = self.link_of(jt.i)?;
+            let j = self.link_of(jt.j);
+            *o = (i, j);
+            *f = full;
+            full += u.n;
+            match j {
+                Some(j) if j == i => return None,
+                Some(j) => {
+                    for l in [i, j] {
+                        let (count, ks) = touch.get_mut(l)?;
+                        if let Some(slot) = ks.get_mut(*count) {
+                            *slot = k;
+                        }
+                        *count += 1;
+                    }
+                }
+                None if u.n == 2 => {
+                    if outer.get_mut(i)?.replace(k).is_some() {
+                        return None;
+                    }
+                }
+                None => return None,
+            }
+        }
+        let two = |k: usize| self.joints.get(k).is_some_and(|u| u.n == 2);
+        let other = |k: usize, p: usize| {
+            on.get(k)
+                .and_then(|(i, j)| if *i == p { *j } else { Some(*i) })
+        };
+        // The rods' choices: `rod[k] = Some((p, a))` if joint `k` is eliminated by rod
+        // `p` whose other joint is `a` (kept: never eliminated itself). Eliminating the
+        // joint whose other link keeps one row makes the substitution one row.
+        let mut rod = [None; MAX_GROUP_JOINTS];
+        let mut kept = [false; MAX_GROUP_JOINTS];
+        let mut elim = outer;
+        for (p, (e, (count, [k1, k2]))) in elim.iter_mut().zip(&touch).enumerate().take(links) {
+            if e.is_some() || *count != 2 || !two(*k1) || !two(*k2) {
+                continue;
+            }
+            let free = |e: usize, a: usize| {
+                let (Some(re), Some(ra), Some(ke)) = (rod.get(e), rod.get(a), kept.get(e)) else {
+                    return false;
+                };
+                re.is_none() && ra.is_none() && !ke
+            };
+            let one_row =
+                |e: usize| other(e, p).is_some_and(|q| outer.get(q).is_some_and(|o| o.is_some()));
+            let choice = [(*k2, *k1), (*k1, *k2)]
+                .into_iter()
+                .filter(|(e, a)| free(*e, *a))
+                .max_by_key(|(e, _)| one_row(*e));
+            if let Some((ke, ka)) = choice {
+                if let (Some(r), Some(kp)) = (rod.get_mut(ke), kept.get_mut(ka)) {
+                    *r = Some((p, ka));
+                    *kp = true;
+                }
+                *e = Some(ke);
+            }
+        }
+        // Columns: the kept inner joints' unknowns.
+        let mut col = [0; MAX_GROUP_JOINTS];
+        let mut m = 0;
+        for ((c, (_, j)), (u, r)) in col
+            .iter_mut()
+            .zip(&on)
+            .zip(self.joints.iter().zip(&rod))
+            .take(nj)
+        {
+            *c = m;
+            if j.is_some() && r.is_none() {
+                m += u.n;
+            }
+        }
+        // Per link: its first kept row and, if it eliminates a joint, that joint's
+        // wrench columns on it (as acting on it) and `n`.
+        let mut proj = [(0, None); MAX_GROUP_LINKS];
+        let mut rows = 0;
+        for (p, ((pr, e), cog)) in proj
+            .iter_mut()
+            .zip(&elim)
+            .zip(&self.cog)
+            .enumerate()
+            .take(links)
+        {
+            let w = e.and_then(|e| {
+                let u = self.joints.get(e)?;
+                let sign = if on.get(e)?.0 == p {
+                    T::one()
+                } else {
+                    -T::one()
+                };
+                let w = u.wrenches(*cog).map(|w| w * sign);
+                Some((w, w[0].cross(&w[1])))
+            });
+            *pr = (rows, w);
+            rows += if w.is_some() { 1 } else { 3 };
+        }
+        if rows != m || m > N {
+            return None;
+        }
+        // A rod's eliminated joint: `λ_e = β + K λ_a` (columns of `K`: per unknown of `a`).
+        let mut aff = [(Vector3::zeros(), [Vector3::zeros(); 2]); MAX_GROUP_JOINTS];
+        for (r, af) in rod.iter().zip(&mut aff).take(nj) {
+            let Some((p, a)) = r else {
+                continue;
+            };
+            let (Some((_, Some((w, n)))), Some(cog), Some(load), Some(ua), Some((ia, _))) = (
+                proj.get(*p),
+                self.cog.get(*p),
+                self.load.get(*p),
+                self.joints.get(*a),
+                on.get(*a),
+            ) else {
+                return None;
+            };
+            let sign = if ia == p { -T::one() } else { T::one() };
+            let wa = ua.wrenches(*cog);
+            let c = [w[0], w[1], *n];
+            let beta = Vector3::from(cramer(&c, &-*load));
+            *af = (
+                beta,
+                [0, 1].map(|k| Vector3::from(cramer(&c, &(wa[k] * sign)))),
+            );
+        }
+        // `A x = b`: per link's kept rows, `-L` and the kept inner joints' wrench
+        // columns (`+W` on the joint's link `i`, `-W` on the other), and each rod's
+        // eliminated joint substituted into its other link.
+        let mut a = [[T::zero(); N]; N];
+        let mut b = [T::zero(); N];
+        // A wrench's entries in a link's kept rows (from its first): `n · v`, or `v`.
+        let project = |n: Option<&Vector3<T>>, v: &Vector3<T>| match n {
+            Some(n) => ([n.dot(v), T::zero(), T::zero()], 1),
+            None => ([v.x, v.y, v.z], 3),
+        };
+        for ((r0, w), load) in proj.iter().zip(&self.load).take(links) {
+            let (e, rows) = project(w.as_ref().map(|(_, n)| n), &-*load);
+            for (x, e) in b.iter_mut().skip(*r0).take(rows).zip(e) {
+                *x = e;
+            }
+        }
+        for ((u, (i, j)), (r, (af, c0))) in self
+            .joints
+            .iter()
+            .zip(&on)
+            .zip(rod.iter().zip(aff.iter().zip(&col)))
+            .take(nj)
+        {
+            let Some(j) = j else {
+                continue;
+            };
+            for (link, neg) in [(*i, false), (*j, true)] {
+                let (Some((r0, w)), Some(cog)) = (proj.get(link), self.cog.get(link)) else {
+                    continue;
+                };
+                let n = w.as_ref().map(|(_, n)| n);
+                let mut wk = u.wrenches(*cog);
+                if neg {
+                    wk = wk.map(|v| -v);
+                }
+                match r {
+                    None => {
+                        for (c, v) in wk.iter().take(u.n).enumerate() {
+                            let (e, rows) = project(n, v);
+                            for (row, e) in a.iter_mut().skip(*r0).take(rows).zip(e) {
+                                if let Some(x) = row.get_mut(c0 + c) {
+                                    *x += e;
+                                }
+                            }
+                        }
+                    }
+                    Some((p, _)) if *p == link => {}
+                    Some((_, ka)) => {
+                        let (beta, kk) = af;
+                        let ca = col.get(*ka).copied().unwrap_or(N);
+                        let rhs = wk[0] * beta.x + wk[1] * beta.y;
+                        let (e, rows) = project(n, &rhs);
+                        for (x, e) in b.iter_mut().skip(*r0).take(rows).zip(e) {
+                            *x -= e;
+                        }
+                        for (c, kc) in kk.iter().enumerate() {
+                            let v = wk[0] * kc.x + wk[1] * kc.y;
+                            let (e, rows) = project(n, &v);
+                            for (row, e) in a.iter_mut().skip(*r0).take(rows).zip(e) {
+                                if let Some(x) = row.get_mut(ca + c) {
+                                    *x += e;
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        if !crate::linalg::solve_rows(&mut a, &mut b, m) {
+            return Some(false);
+        }
+        // The kept inner joints' unknowns, then the rods' eliminated ones.
+        for ((u, ((_, j), r)), (f0, c0)) in self
+            .joints
+            .iter()
+            .zip(on.iter().zip(&rod))
+            .zip(first.iter().zip(&col))
+            .take(nj)
+        {
+            if j.is_none() || r.is_some() {
+                continue;
+            }
+            for (o, v) in self
+                .lam
+                .iter_mut()
+                .skip(*f0)
+                .zip(b.iter().skip(*c0))
+                .take(u.n)
+            {
+                *o = *v;
+            }
+        }
+        for ((r, (beta, kk)), f0) in rod.iter().zip(&aff).zip(&first).take(nj) {
+            let Some((_, ka)) = r else {
+                continue;
+            };
+            let ca = col.get(*ka).copied().unwrap_or(N);
+            let (Some(x0), Some(x1)) = (b.get(ca), b.get(ca + 1)) else {
+                return None;
+            };
+            let l = *beta + kk[0] * *x0 + kk[1] * *x1;
+            for (o, v) in self.lam.iter_mut().skip(*f0).zip([l.x, l.y]) {
+                *o = v;
+            }
+        }
+        // Each inner reaction's wrench on a link with an outer joint into that link's
+        // right-hand side `-L - Σ ±W λ`; then the outer joints.
+        let mut rhs = [Vector3::zeros(); MAX_GROUP_LINKS];
+        for (r, l) in rhs.iter_mut().zip(&self.load) {
+            *r = -*l;
+        }
+        for ((u, (i, j)), f0) in self.joints.iter().zip(&on).zip(&first).take(nj) {
+            let Some(j) = j else {
+                continue;
+            };
+            let r = u.reaction(self.lam.get(*f0..).unwrap_or(&[]));
+            for (link, sign) in [(*i, T::one()), (*j, -T::one())] {
+                let (Some(Some(_)), Some(cog), Some(rl)) =
+                    (outer.get(link), self.cog.get(link), rhs.get_mut(link))
+                else {
+                    continue;
+                };
+                let f = r.force * sign;
+                let mom = (r.moment + cross(&(u.at - *cog), &r.force)) * sign;
+                *rl -= Vector3::new(f.x, f.y, mom);
+            }
+        }
+        for ((o, (_, w)), rl) in outer.iter().zip(&proj).zip(&rhs).take(links) {
+            let (Some(k), Some((wo, n))) = (o, w) else {
+                continue;
+            };
+            let Some(f0) = first.get(*k) else {
+                continue;
+            };
+            let [x, y, _] = cramer(&[wo[0], wo[1], *n], rl);
+            for (o, v) in self.lam.iter_mut().skip(*f0).zip([x, y]) {
+                *o = v;
+            }
+        }
+        Some(true)
+    }
+
     /// Any group: its equilibrium `A λ = b` as one dense system (size `N = 3 × links`,
     /// padded with identity), by Gaussian elimination with partial pivoting; `false`
     /// if it is singular.
+    #[inline(never)]
     fn dense<const N: usize>(&mut self, g: &Group<T>) -> bool {
         let mut a = SMatrix::<T, N, N>::identity();
         let mut b = SVector::<T, N>::zeros();
@@ -283,7 +619,9 @@ impl<T: Real> Equilibrium<T> {
         let mut col = 0;
         for (jt, u) in g.joints.iter().zip(&self.joints) {
             for (body, sign) in [(jt.i, T::one()), (jt.j, -T::one())] {
-                let Some((k, cog)) = link_index(g, body).and_then(|k| Some((k, *self.cog.get(k)?)))
+                let Some((k, cog)) = self
+                    .link_of(body)
+                    .and_then(|k| Some((k, *self.cog.get(k)?)))
                 else {
                     continue;
                 };
@@ -308,10 +646,8 @@ impl<T: Real> Equilibrium<T> {
     }
 }
 
-/// The placement index of `body` in group `g`, if it is one of its links.
-fn link_index<T: Real>(g: &Group<T>, body: u8) -> Option<usize> {
-    g.placements.iter().position(|p| p.link == body)
-}
+/// [`Equilibrium::link`] of a body that is not a link of the group.
+const NOT_IN_GROUP: u8 = u8::MAX;
 
 /// `x` with `Σ_k x_k c_k = r` by Cramer's rule (`det = c_0 · (c_1 × c_2)`); non-finite
 /// when the columns are dependent.
@@ -350,7 +686,8 @@ pub fn reactions<T: Real>(
     let mut eq = Equilibrium::new();
     for (gi, g) in model.groups().iter().enumerate().rev() {
         eq.set(model, ws, g, &loads);
-        if !(eq.solve(g) && eq.lam.iter().all(|v| v.finite())) {
+        let used: usize = eq.joints.iter().map(|u| u.n).sum();
+        if !(eq.solve(g) && eq.lam.iter().take(used).all(|v| v.finite())) {
             return Err(StepError::Group {
                 time,
                 group: group_id(g, gi),
@@ -365,7 +702,7 @@ pub fn reactions<T: Real>(
                 *slot = r;
             }
             // The reaction on the other body, if it belongs to an earlier group.
-            if link_index(g, jt.j).is_none() {
+            if eq.link_of(jt.j).is_none() {
                 add_load(model, &ws.body, &mut loads, jt.j, u.at, -r.force, -r.moment);
             }
         }

@@ -111,17 +111,33 @@ pub fn evaluate_velocities<T: Real>(
         record_velocity_column(model, ws, j);
     }
     // Where C was recorded: the next position pass predicts Newton's start from it.
-    for gd in ws.group.iter_mut().take(model.groups().len()) {
-        gd.dx_dq_at = (ws.q, gd.x);
+    for (g, gd) in model.groups().iter().zip(ws.group.iter_mut()) {
+        if g.kind.solved_by_newton() {
+            gd.dx_dq_at = (ws.q, gd.x);
+        }
     }
     let mut rates = [T::zero(); MAX_DOF];
     for (k, r) in rates.iter_mut().enumerate().take(m) {
         *r = qd.get(k).copied().unwrap_or(T::zero());
     }
     ws.qd = rates;
+    let Workspace { body, group, v, .. } = ws;
+    if let (1, [r, ..]) = (m, rates) {
+        // One degree of freedom: the bodies and groups hold the pass at q̇ = e_0, and
+        // speeds are linear in q̇: scaled by q̇_0, they are the actual speeds.
+        for b in body.iter_mut().skip(1).take(nb - 1) {
+            b.omega *= r;
+            b.v *= r;
+        }
+        for gd in group.iter_mut().take(model.groups().len()) {
+            for x in gd.xd.iter_mut() {
+                *x *= r;
+            }
+        }
+        return Ok(());
+    }
     // Speeds are linear in q̇: the actual COG speeds are V q̇ (its live rows), and each
     // frame origin's follows as v_o = v_G - ω J R(θ) c (no further velocity pass).
-    let Workspace { body, group, v, .. } = ws;
     for (i, (l, b)) in model
         .links()
         .iter()
@@ -129,7 +145,7 @@ pub fn evaluate_velocities<T: Real>(
         .enumerate()
         .take(nb - 1)
     {
-        let row = |k: usize| times_rates(v, k, &rates);
+        let row = |k: usize| times_rates(v, k, &rates, m);
         let (vx, vy, w) = (row(3 * i), row(3 * i + 1), row(3 * i + 2));
         b.omega = w;
         b.v = Vec2::new(vx, vy) - perp(&rotate_cs(b.c, b.s, &l.cog)) * w;
@@ -137,24 +153,26 @@ pub fn evaluate_velocities<T: Real>(
     for gd in group.iter_mut().take(model.groups().len()) {
         let GroupData { xd, dx_dq, .. } = gd;
         for (k, dst) in xd.iter_mut().enumerate() {
-            *dst = times_rates(dx_dq, k, &rates);
+            *dst = times_rates(dx_dq, k, &rates, m);
         }
     }
     Ok(())
 }
 
-/// `Σ_j m_kj q̇_j`: row `k` of `V` or `C` times the rates, summed over every column
-/// in order as nalgebra's matrix-vector product does (the padding columns' rates are
-/// zero).
+/// `Σ_j m_kj q̇_j`: row `k` of `V` or `C` times the rates, summed over the first
+/// `cols` columns (the degrees of freedom) in order, as nalgebra's matrix-vector
+/// product does (the padding columns' rates are zero: they add nothing).
 #[inline]
 fn times_rates<T: Real, const R: usize>(
     m: &SMatrix<T, R, MAX_DOF>,
     k: usize,
     rates: &[T; MAX_DOF],
+    cols: usize,
 ) -> T {
     let mut terms = rates
         .iter()
         .enumerate()
+        .take(cols)
         .map(|(j, r)| m.get((k, j)).copied().unwrap_or(T::zero()) * *r);
     let first = terms.next().unwrap_or(T::zero());
     terms.fold(first, |acc, t| acc + t)

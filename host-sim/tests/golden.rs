@@ -73,13 +73,13 @@ const PINS: &[Pin<'static>] = &[
     Pin {
         args: "five-bar",
         exit: 0,
-        csv: "400fb07137f965879a3a9343dea8b8b2b5718be99873c5af75af6296759f1f53",
+        csv: "5562327df3829b4a082a8f08d6a3445edeb95dd009bad56affce96f9a893387b",
         logs: None,
     },
     Pin {
         args: "ccc-s1",
         exit: 0,
-        csv: "30a74b4b4845ea20b539c8c832917dc63b26dcf0ba33130993dc2ed7f7e14f15",
+        csv: "36d7fe74cdc7aaa35c208d49d368ba0e91d5f9430e1113b04c9e548af34b4c2a",
         logs: Some((
             "2a18d19a58b935cc5a81a088e9c456f81ad855f74a9f76a5d7ec92b8b8ba339b",
             "9a52b761f69ab666f48cadb42b788f2fabceddd39201f1066997acf316fd6238",
@@ -88,31 +88,31 @@ const PINS: &[Pin<'static>] = &[
     Pin {
         args: "ccc-s2",
         exit: 0,
-        csv: "d7e1bdaf09a6831a0af293b70c3872225b100c64e4c265bc40a0e44c44188ba3",
+        csv: "acfe97d434ad34a4d9c51f5c63ed1be7550053d29c75e120a5edce553f514737",
         logs: Some((
-            "d9f046d0ed4f25b7dfc2e16c56714dd64216c39ff0bd30ce870bc9a8600a7c96",
-            "62e3009b9ca70a25621eabee0329b5d0378451b9c9c83c077764bfa61c52ff86",
+            "04b9e5cc80fd8eface79253afa3c57ed6724165444535588ca053c368996dae8",
+            "4094b4d965635a6730dbfa8aca3851e218aeedb360a03e3450d85373f01f4dcd",
         )),
     },
     Pin {
         args: "ccc-s2 --ccw",
         exit: 0,
-        csv: "649f1664dc5cbdf7650301d12d7988158d33630c3c116fbf9b00ea41b92cb20b",
+        csv: "917014f3596465f2b07af49ae91327ca14ea2552d96fb6a2244c581f18c51fc2",
         logs: Some((
-            "dcdb731141d86cf0fce3dfe6534580be4f24ba3f20966b8c6c0e0866d3898a06",
-            "3aa1755250411579667e928af794db9c8a045d73bccfd0670c1a793fa55cf8f1",
+            "1d042917154c4a10f11922ae5a9843390e4a3804df66ba833ccc1d5d84808a2d",
+            "b23ff2cec9e3a6950388edcae36b13d456bc997ac174a7f3bbb7aab62e0bd1d5",
         )),
     },
     Pin {
         args: "five-bar --f32",
-        exit: 0,
-        csv: "24aed0aa6b0a2153881bb5143c429a151f8b9520cc0ca8a7e84d4445025f806a",
+        exit: 1,
+        csv: "4d60d13d3ff840b679210e2df4193bed8a795f9ed367fe1d483acef2a9656d8d",
         logs: None,
     },
     Pin {
         args: "ccc-s1 --f32",
         exit: 0,
-        csv: "1aae84cf101116da35d0f2131bf8d7e3ccc2af86bd01989b1953a0889562cd68",
+        csv: "142dcffc2cd798d7ae3a223f3c8c8b1dff9e6137f3a3efec8667398e44739360",
         logs: Some((
             "2a18d19a58b935cc5a81a088e9c456f81ad855f74a9f76a5d7ec92b8b8ba339b",
             "9a52b761f69ab666f48cadb42b788f2fabceddd39201f1066997acf316fd6238",
@@ -121,10 +121,10 @@ const PINS: &[Pin<'static>] = &[
     Pin {
         args: "ccc-s2 --f32",
         exit: 0,
-        csv: "7cf6d28851354b31a7a9b64738f91f526b3420e89015317dc475a6abfa1520e4",
+        csv: "67a04b1e7c035c99f3ea03b20cfdd50da241e1dcad0d11620f51b3b04bf2c56d",
         logs: Some((
-            "9404aea755654916a8cb5c85cf987c3658a5eae97e6b92d76cd91e470ff1dbd3",
-            "78ed98f8a9fae434297e4977840ad3f7a0de885810d8642b8232a6561ef9d228",
+            "c532a25a55bbc33bac968644972eb9192fe0c7af46ee49531600131bd3b0e80d",
+            "8d59d24a92d70cb96f6ed53b67bba3520b68a44e8e160a9b308139bdaec8d667",
         )),
     },
 ];

@@ -426,6 +426,28 @@ fn declare<T: Real, M: DerefMut<Target = Model<T>>>(
     Ok(map)
 }
 
+/// The physical link whose angle is the coordinate of a one-coordinate choice of
+/// `mode` (the `coord_link` [`build`] sets: the crank, the swing link, the locked
+/// branch's rod, lever 6 for the joined levers); `None` for the choices of two
+/// coordinates or none, and for a choice the mode does not have. Such a choice is at
+/// its dead point where this link stands still while the mechanism moves: its angle
+/// cannot drive the mode there.
+pub(crate) fn driving_link(mode: Mode, coords: Coordinates) -> Option<usize> {
+    if mode.dof() != 1 {
+        return None;
+    }
+    let locked = mode.clutches().iter().position(|c| *c == Clutch::Locked);
+    match (coords, mode) {
+        (Coordinates::Crank, _) => Some(CRANK),
+        (Coordinates::Swing, Mode::I6 | Mode::I8) => Some(SWING),
+        (Coordinates::Rod, Mode::I6 | Mode::I8) => {
+            locked.and_then(|k| BRANCHES.get(k)).map(|b| b.0)
+        }
+        (Coordinates::Lever, Mode::A68) => Some(BRANCHES[0].1),
+        _ => None,
+    }
+}
+
 /// The physical link angles (rad, index 1..=8) of the converter assembled at crank
 /// angle `crank` and swing-link angle `swing` on the parameters' branches (SPEC 3:
 /// C from circles about B and E, D on the rocker, G and I from circles about D and H);
@@ -455,4 +477,29 @@ pub fn initial_pose<T: Real>(p: &CccParams<T>, crank: T, swing: T) -> Option<[T;
         *pose.get_mut(*lever)? = angle(pin - p.h);
     }
     Some(pose)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// [`driving_link`] names the link each one-coordinate model is built on.
+    #[test]
+    fn driving_link_is_the_built_coordinate() {
+        let p = CccParams::<f64>::reference();
+        let pose = initial_pose(&p, 0.3, 1.9).expect("the reference assembles");
+        let mut checked = 0;
+        for mode in Mode::ALL {
+            for coords in mode.coordinate_choices().iter().copied() {
+                let Ok((_, map)) = build(&p, mode, coords, &pose) else {
+                    continue;
+                };
+                let expected = (map.dof == 1).then_some(map.coord_link[0] as usize);
+                assert_eq!(driving_link(mode, coords), expected, "{mode} {coords}");
+                checked += usize::from(expected.is_some());
+            }
+        }
+        // I6, I8: crank, swing, rod; A68: lever, crank.
+        assert_eq!(checked, 8);
+    }
 }

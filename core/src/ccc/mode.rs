@@ -98,7 +98,7 @@ impl Mode {
         use Coordinates::*;
         match self {
             Mode::Free | Mode::I0 | Mode::A6 | Mode::A8 => &[CrankSwing, CrankCoupler, SwingRocker],
-            Mode::I6 | Mode::I8 => &[Crank, Swing, Rod],
+            Mode::I6 | Mode::I8 => &[Swing, Crank, Rod],
             Mode::A68 => &[Lever, Crank],
             Mode::Jam => &[Rest],
         }

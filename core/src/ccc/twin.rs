@@ -10,7 +10,7 @@
 //! event functions are re-checked there): no event is lost, it is late by under one
 //! step, and the twin cannot chatter.
 
-use super::build::{initial_pose, BRANCHES, CRANK, ROCKER};
+use super::build::{driving_link, initial_pose, BRANCHES, CRANK, ROCKER};
 use super::mode::{Clutch, Coordinates, Mode};
 use super::params::CccParams;
 use super::slot::{
@@ -412,9 +412,12 @@ pub struct Twin<T: Real> {
     settings: TwinSettings<T>,
     drive: T,
     slot: Slot<T>,
-    cand: Slot<T>,
+    /// The backup slot and the candidate slot (see [`Twin::scratch`]), which is which
+    /// set by `backup_at` ([`spare_roles`]): the mode choice hands the backup's role to
+    /// the slot that holds its pick by flipping it, not by swapping 30 KB.
+    spares: [Slot<T>; 2],
+    backup_at: u8,
     reference: Slot<T>,
-    backup: Slot<T>,
     dp5: Dp5<T, STATE>,
     y: SVector<T, STATE>,
     t: T,
@@ -425,6 +428,12 @@ pub struct Twin<T: Real> {
     c: [T; 2],
     joints: [Vec2<T>; 11],
     guards: Guards<T>,
+    /// Time derivatives of the speed event functions at the last full evaluation
+    /// (rad/s²; `None` for the others): the slopes of [`hermite_root`]'s interpolant.
+    guard_rates: Guards<T>,
+    /// The event functions at the start of the last DP5 step, if it had no event, and
+    /// its length (s): a third sample of a torque function for [`quadratic_root`].
+    last_guards: Option<(Guards<T>, T)>,
     audit: Audit<T>,
     events: heapless::Vec<Event<T>, MAX_EVENTS_PER_STEP>,
     switches: heapless::Vec<CoordinateSwitch<T>, { MAX_RETRIES + 1 }>,
@@ -438,6 +447,9 @@ struct Work<T: Real> {
     y: SVector<T, STATE>,
     impact: T,
     switched: bool,
+    /// The mode choice took a mode in this step, and with it the coordinate choice
+    /// [`Twin::try_candidate`] found best at the event.
+    chosen: bool,
 }
 
 impl<T: Real> Twin<T> {
@@ -506,9 +518,9 @@ impl<T: Real> Twin<T> {
             drive: params.drive.sign(),
             params,
             settings,
-            cand: spare,
+            spares: [slot.clone(), spare],
+            backup_at: 0,
             reference: slot.clone(),
-            backup: slot.clone(),
             slot,
             dp5: Dp5::new(),
             y,
@@ -520,6 +532,8 @@ impl<T: Real> Twin<T> {
             c: [T::zero(); 2],
             joints: [Vec2::zeros(); 11],
             guards: [None; 6],
+            guard_rates: [None; 6],
+            last_guards: None,
             audit: Audit::default(),
             events: heapless::Vec::new(),
             switches: heapless::Vec::new(),
@@ -534,6 +548,7 @@ impl<T: Real> Twin<T> {
             y: twin.y,
             impact: T::zero(),
             switched: false,
+            chosen: false,
         };
         twin.finish(&mut w, &inputs)?;
         if settings.clutch {
@@ -664,6 +679,7 @@ impl<T: Real> Twin<T> {
             y: self.y,
             impact: T::zero(),
             switched: false,
+            chosen: false,
         }
     }
 
@@ -727,6 +743,8 @@ impl<T: Real> Twin<T> {
         let h_max = self.settings.h / T::c(substeps as f64);
         if changed {
             // Inputs changed: re-evaluate here and see whether the mode still holds.
+            // The torque functions jump with the load: no earlier sample fits.
+            self.last_guards = None;
             self.finish(w, inputs)?;
             if self.settings.clutch && self.guards.iter().flatten().any(|g| *g > T::zero()) {
                 self.choose(w, EventKind::Inputs, inputs)?;
@@ -770,26 +788,39 @@ impl<T: Real> Twin<T> {
                     continue;
                 }
             }
-            let g0 = self.guards;
+            let (g0, r0) = (self.guards, self.guard_rates);
             self.finish_evaluated(w, inputs)?;
             let fired = fired(&g0, &self.guards);
             if fired == 0 || events >= MAX_EVENTS_PER_STEP || !self.settings.clutch {
+                self.last_guards = (fired == 0).then_some((g0, h));
                 continue;
             }
             events += 1;
-            let (theta, kind) = self.locate(w, t0, h, &g0, fired, inputs)?;
-            let mut ye = SVector::<T, STATE>::zeros();
-            self.dp5.dense(theta, &mut ye);
-            w.t = t0 + theta * h;
-            w.y = ye;
-            // The mode choice reads the old mode's positions and speeds only (the new
-            // mode is evaluated in full): no accelerations or kinetostatics here.
-            self.slot
-                .eval_speeds(w.t, &w.y)
-                .map_err(|e| self.physical_error(e))?;
+            let (theta, kind, evaluated) = self.locate(w, t0, h, (&g0, &r0), fired, inputs)?;
+            self.last_guards = None;
+            if !evaluated {
+                let mut ye = SVector::<T, STATE>::zeros();
+                self.dp5.dense(theta, &mut ye);
+                w.t = t0 + theta * h;
+                w.y = ye;
+                // The mode choice reads the old mode's positions and speeds only (the
+                // new mode is evaluated in full): no accelerations or kinetostatics.
+                self.slot
+                    .eval_speeds(w.t, &w.y)
+                    .map_err(|e| self.physical_error(e))?;
+            }
             self.choose(w, kind, inputs)?;
         }
-        if self.slot.mode != Mode::Jam && self.slot.conditioning() < self.settings.switch_below {
+        // Coordinates chosen at an event in this step stand until its end: the mode
+        // choice took them by the same rule (the first conditioned at least
+        // `switch_below`, else the best by 1.5) a fraction of the step ago. Scanning
+        // again cost 24k instructions at S2's catches into A68, whose lever choice is
+        // then at its dead point (the lever stops as it catches) and fails to assemble
+        // each time. The next step's end scans as usual.
+        if self.slot.mode != Mode::Jam
+            && !w.chosen
+            && self.slot.conditioning() < self.settings.switch_below
+        {
             self.switch_coordinates(w, inputs, None)?;
         }
         if !same_bits(w.t, t_end) {
@@ -805,22 +836,33 @@ impl<T: Real> Twin<T> {
     /// [`Twin::take_candidate`] keeps the pre-step slot as the backup with one swap, no
     /// copy (a slot is 30 KB in f64).
     fn scratch(&mut self, switched: bool) -> (&mut Slot<T>, &CccParams<T>) {
-        let slot = if switched {
-            &mut self.cand
+        let (backup, cand) = spare_roles(&mut self.spares, self.backup_at);
+        (if switched { cand } else { backup }, &self.params)
+    }
+
+    /// The slot a candidate is built in: the scratch ([`Twin::scratch`]), or with
+    /// `second` before the step changed the current slot (`switched` false), the
+    /// candidate slot, the other one free then.
+    fn build_slot(&mut self, switched: bool, second: bool) -> (&mut Slot<T>, &CccParams<T>) {
+        if second && !switched {
+            (
+                spare_roles(&mut self.spares, self.backup_at).1,
+                &self.params,
+            )
         } else {
-            &mut self.backup
-        };
-        (slot, &self.params)
+            self.scratch(switched)
+        }
     }
 
     /// Makes the scratch slot ([`Twin::scratch`]), which holds the new mode or
     /// coordinates, the current one; the first time in a step the pre-step slot goes
     /// to the backup.
     fn take_candidate(&mut self, w: &mut Work<T>) {
+        let (backup, cand) = spare_roles(&mut self.spares, self.backup_at);
         if w.switched {
-            core::mem::swap(&mut self.slot, &mut self.cand);
+            core::mem::swap(&mut self.slot, cand);
         } else {
-            core::mem::swap(&mut self.slot, &mut self.backup);
+            core::mem::swap(&mut self.slot, backup);
             w.switched = true;
         }
     }
@@ -833,10 +875,14 @@ impl<T: Real> Twin<T> {
         saved: &[[T; crate::config::MAX_GROUP_VARS]; crate::config::MAX_GROUPS],
     ) {
         if switched {
-            core::mem::swap(&mut self.slot, &mut self.backup);
+            core::mem::swap(
+                &mut self.slot,
+                spare_roles(&mut self.spares, self.backup_at).0,
+            );
         }
         self.set_group_unknowns(saved);
         self.dp5.invalidate();
+        self.last_guards = None;
         let mut w = self.work_from_state();
         // It evaluated at this very state before: this cannot fail, and if it did the
         // workspace would merely hold the failed evaluation.
@@ -865,11 +911,22 @@ impl<T: Real> Twin<T> {
 
     /// Evaluates the current slot at `w`'s state: equations of motion, accelerations,
     /// kinetostatics, the event functions.
+    /// The next DP5 step from `w`'s state takes its first stage from this evaluation.
     fn finish(&mut self, w: &mut Work<T>, inputs: &Inputs<T>) -> Result<(), TwinError> {
         self.slot
             .eval(w.t, &w.y, inputs, self.drive)
             .map_err(|e| self.physical_error(e))?;
-        self.finish_evaluated(w, inputs)
+        self.finish_evaluated(w, inputs)?;
+        self.seed_first_stage(w, inputs);
+        Ok(())
+    }
+
+    /// Hands the slot's evaluation at `w`'s state (just made, in full) to the DP5
+    /// stepper as the first stage of a step from there: after a mode change or a
+    /// coordinate switch the rest of the step then takes 6 evaluations, not 7.
+    fn seed_first_stage(&mut self, w: &Work<T>, inputs: &Inputs<T>) {
+        let k1 = self.slot.rates(&w.y, inputs, self.drive);
+        self.dp5.seed(w.t, &w.y, &k1);
     }
 
     /// [`Twin::finish`] when the slot's workspace already holds the evaluation of `w`'s
@@ -891,6 +948,29 @@ impl<T: Real> Twin<T> {
         let links = self.slot.links(&self.params);
         self.c = self.slot.clutch_torques(&self.params, &links);
         self.guards = self.guards_of(&self.slot, &links, &self.c, inputs);
+        self.guard_rates = self.guard_rates_of(&self.slot, &links);
+    }
+
+    /// The time derivatives of [`Twin::guards_of`]'s speed functions at `slot`'s
+    /// evaluated state (accelerations included): a catch's `d·(α_lever − α_shaft)`, the
+    /// shaft stop's `-d·α_shaft` (the catch's tolerance taken as constant).
+    fn guard_rates_of(&self, slot: &Slot<T>, links: &[LinkState<T>; 9]) -> Guards<T> {
+        let mut r = [None; 6];
+        if !self.settings.clutch {
+            return r;
+        }
+        let d = self.drive;
+        let mode = slot.mode;
+        let shaft = shaft_accel(mode, links);
+        for (k, ((_, lever), clutch)) in BRANCHES.iter().zip(mode.clutches()).enumerate() {
+            if clutch == Clutch::Free {
+                r[k] = Some(d * (links.get(*lever).map_or(T::zero(), |s| s.alpha) - shaft));
+            }
+        }
+        if mode.shaft_turning() {
+            r[5] = Some(-d * shaft);
+        }
+        r
     }
 
     /// The event functions of `slot`'s mode at its evaluated state.
@@ -946,16 +1026,30 @@ impl<T: Real> Twin<T> {
 
     /// Locates the first crossing among the fired event functions inside the last
     /// DP5 step (`t0`, `h`) by Illinois regula falsi on the dense output; returns the
-    /// fraction of the step just past the event and which event it is.
+    /// fraction of the step just past the event, which event it is, and whether `w`
+    /// and the slot hold that point, evaluated (the last evaluation was there).
+    ///
+    /// `(g0, r0)`: the event functions and the speed functions' rates at the step's
+    /// start. A single speed function fired starts the iteration from the root of its
+    /// cubic Hermite interpolant over the step ([`hermite_root`]: the values and rates
+    /// at both ends, no evaluation), 4th-order accurate: S2's catches and shaft stops
+    /// are then located in 2–3 evaluations instead of 3–5. A single torque function
+    /// (a release, a breakaway; each evaluation is a full one, kinetostatics included)
+    /// starts from the root of its quadratic through the step's ends and the start of
+    /// the step before ([`quadratic_root`]), if that step had no event.
+    ///
+    /// Not inlined, nor is [`Twin::try_candidate`]: with both inlined the f64 step's
+    /// stack high-water was 20.6 KB instead of 16.7 KB (`tests/footprint.rs`).
+    #[inline(never)]
     fn locate(
         &mut self,
         w: &mut Work<T>,
         t0: T,
         h: T,
-        g0: &Guards<T>,
+        (g0, r0): (&Guards<T>, &Guards<T>),
         fired: u8,
         inputs: &Inputs<T>,
-    ) -> Result<(T, EventKind), TwinError> {
+    ) -> Result<(T, EventKind, bool), TwinError> {
         let pick = |g: &Guards<T>| -> (T, usize) {
             let mut best = (T::c(f64::NEG_INFINITY), 0);
             for (k, v) in g.iter().enumerate() {
@@ -979,10 +1073,34 @@ impl<T: Real> Twin<T> {
         // THETA_TOL, or 8 ulps of the step's fraction if that is larger (f32: 9.5e-7),
         // so that the margin below moves the point by a few ulps at least.
         let tol = T::c(THETA_TOL).max(T::EPS * T::c(8.0));
+        let k = fired.trailing_zeros() as usize;
+        let single = fired.count_ones() == 1;
+        let before = self
+            .last_guards
+            .and_then(|(g, hp)| g.get(k).copied().flatten().map(|v| (v, hp / h)));
+        let mut guess = match (
+            g0.get(k),
+            self.guards.get(k),
+            r0.get(k),
+            self.guard_rates.get(k),
+        ) {
+            (Some(Some(a)), Some(Some(b)), Some(Some(ra)), Some(Some(rb)))
+                if single && speeds_only =>
+            {
+                hermite_root(*a, *b, *ra * h, *rb * h, tol)
+            }
+            (Some(Some(a)), Some(Some(b)), _, _) if single && !speeds_only => {
+                before.and_then(|(gm, r)| quadratic_root(gm, r, *a, *b, tol))
+            }
+            _ => None,
+        };
+        let mut at_hi = false;
+        let mut used = 0;
         for _ in 0..MAX_LOCATE_ITER {
             if hi - lo <= tol {
                 break;
             }
+            used += 1;
             // Regula falsi's point, kept at least 0.4 of the tolerance inside the
             // bracket: once the crossing is that close to an end, the next point lands
             // past it and closes the bracket. (Bisecting whenever the point fell within
@@ -994,7 +1112,9 @@ impl<T: Real> Twin<T> {
             // `lo` for good: the margin crept up 0.4 tol per evaluation, the bracket
             // never closed and the event was placed at the step's end, past the lever's
             // reversal (S2 in f32 chose I0 instead of I8 at t = 0.3073 s). Bisect then.
-            let th = (lo * ghi - hi * glo) / (ghi - glo);
+            let th = guess
+                .take()
+                .unwrap_or_else(|| (lo * ghi - hi * glo) / (ghi - glo));
             let margin = tol * T::c(0.4);
             let th = if th.finite() && glo != T::zero() {
                 th.max(lo + margin).min(hi - margin)
@@ -1016,7 +1136,8 @@ impl<T: Real> Twin<T> {
                 self.finish(w, inputs)?;
             }
             let (g, k) = pick(&self.guards);
-            if g > T::zero() {
+            at_hi = g > T::zero();
+            if at_hi {
                 hi = th;
                 ghi = g;
                 which = k;
@@ -1033,6 +1154,10 @@ impl<T: Real> Twin<T> {
                 side = -1;
             }
         }
+        log::debug!(
+            "event functions {fired:#08b}: located to {:?} of the step in {used} evaluations",
+            hi - lo
+        );
         let kind = match which {
             0 => EventKind::Catch(6),
             1 => EventKind::Catch(8),
@@ -1041,7 +1166,7 @@ impl<T: Real> Twin<T> {
             4 => EventKind::Breakaway,
             _ => EventKind::ShaftStop,
         };
-        Ok((hi, kind))
+        Ok((hi, kind, at_hi))
     }
 
     /// Physical angles of the slot's links, unwrapped against the last committed ones.
@@ -1126,7 +1251,7 @@ impl<T: Real> Twin<T> {
             &pose,
             time,
             &mut self.reference,
-            &mut self.cand,
+            spare_roles(&mut self.spares, self.backup_at).1,
         )?;
         let mut yr = SVector::<T, STATE>::zeros();
         for k in 0..2 {
@@ -1230,6 +1355,7 @@ impl<T: Real> Twin<T> {
         }
         // The candidate slot holds the chosen mode, evaluated: take it.
         self.take_candidate(w);
+        w.chosen = true;
         w.y = self.cand_state(w);
         w.impact += loss;
         self.dp5.invalidate();
@@ -1238,6 +1364,7 @@ impl<T: Real> Twin<T> {
             // included) at this very state, `w.y` being read back from it: evaluating
             // again would give the same bits.
             self.read_evaluation(inputs);
+            self.seed_first_stage(w, inputs);
         } else {
             self.finish(w, inputs)?;
         }
@@ -1279,6 +1406,7 @@ impl<T: Real> Twin<T> {
     /// `u_plus` (reference coordinates), evaluates it and returns how far it violates
     /// SPEC 3's consistency conditions (0: consistent).
     #[allow(clippy::too_many_arguments)]
+    #[inline(never)]
     fn try_candidate(
         &mut self,
         w: &Work<T>,
@@ -1303,31 +1431,76 @@ impl<T: Real> Twin<T> {
         // still carries the speeds, but the rest of the step in it is far off: A6 ->
         // A68 with the lever at 0.003 lost 0.45 J of kinetic energy in one step.
         let scale_w = omega.iter().fold(T::one(), |a, w| a.max(w.abs()));
-        // (conditioning, choice, speed gap) of the choice taken, and whether the
-        // candidate slot holds it.
+        // (conditioning, choice, speed gap) of the choice taken, and which slot holds
+        // it (`Some(second)`, see `Twin::build_slot`; `None`: none, it was overwritten).
         let mut chosen: Option<(T, Coordinates, T)> = None;
-        let mut holds = false;
-        for coords in m.coordinate_choices().iter().copied() {
-            if !self.load_candidate(w, m, coords, pose, &omega, inputs, scale_w) {
-                holds = false;
+        let mut kept: Option<bool> = None;
+        // Before the step changed the current slot, two slots are free: the choice
+        // kept so far stays in one while the next is built in the other, so none is
+        // built twice, and the one not taken stays built for the end-of-step scan of
+        // `switch_coordinates`, which then moves it instead of building it again.
+        let two = !w.switched;
+        // A choice whose coordinate link stands still (under `speed_tol` of the largest
+        // speed) while the mechanism moves (a shaft stop can leave it all at rest) is
+        // at its dead point: it fails to assemble,
+        // cannot carry the speeds, or carries them through a velocity ratio over 1e6,
+        // conditioned far below any other choice that assembles, which it would have
+        // to beat by 1.5. So it is tried only if no other choice assembled. At S2's
+        // catches into A68 from a held shaft the lever stops as it catches (the rocker
+        // reverses): its choice failed to build each time (19k instructions).
+        let still = |w: T| !(w.abs() > speed_tol::<T>() * scale_w);
+        let moving = !omega.iter().all(|w| still(*w));
+        let dead = |c: Coordinates| {
+            moving
+                && driving_link(m, c)
+                    .is_some_and(|p| still(omega.get(p).copied().unwrap_or(T::zero())))
+        };
+        let choices = m.coordinate_choices();
+        let ordered = choices
+            .iter()
+            .filter(|c| !dead(**c))
+            .chain(choices.iter().filter(|c| dead(**c)))
+            .copied();
+        for coords in ordered {
+            if chosen.is_some() && dead(coords) {
+                break;
+            }
+            let second = two && kept == Some(false);
+            if !self.load_candidate(w, m, coords, pose, &omega, inputs, scale_w, second) {
+                if !two {
+                    kept = None;
+                }
                 continue;
             }
-            let cond = self.scratch(w.switched).0.conditioning();
-            holds = chosen.is_none_or(|(c, _, _)| cond > c * T::c(1.5));
-            if holds {
+            let cond = self.build_slot(w.switched, second).0.conditioning();
+            if chosen.is_none_or(|(c, _, _)| cond > c * T::c(1.5)) {
                 chosen = Some((cond, coords, self.speed_gap));
+                kept = Some(second);
+            } else if !two {
+                kept = None;
             }
             if chosen.is_some_and(|(c, _, _)| c >= self.settings.switch_below) {
                 break;
             }
         }
-        let ok = match chosen {
-            Some((_, coords, gap)) => {
+        let ok = match (chosen, kept) {
+            (Some((_, _, gap)), Some(second)) => {
                 self.speed_gap = gap;
-                // The same pose and speeds: the same bits as in the scan.
-                holds || self.load_candidate(w, m, coords, pose, &omega, inputs, scale_w)
+                if second {
+                    // The candidate slot becomes the scratch, where `take_candidate`
+                    // takes the pick from (the other slot, free, becomes the candidate
+                    // slot): a flip of roles, no copy.
+                    self.backup_at ^= 1;
+                }
+                true
             }
-            None => false,
+            (Some((_, coords, gap)), None) => {
+                self.speed_gap = gap;
+                // Overwritten by a later choice in the one free slot: built again at
+                // the scan's pose and speeds.
+                self.load_candidate(w, m, coords, pose, &omega, inputs, scale_w, false)
+            }
+            (None, _) => false,
         };
         // The kinetostatics (the clutch torques) of the choice taken only.
         let (cand, params) = self.scratch(w.switched);
@@ -1501,8 +1674,10 @@ impl<T: Real> Twin<T> {
         Some(self.violation(m, from, &c, &links, inputs, tol_w))
     }
 
-    /// Builds mode `m` driven by `coords` into the candidate slot at `pose` with the
-    /// physical speeds `omega` and evaluates its equations of motion (not the
+    /// Builds mode `m` driven by `coords` at `pose` with the physical speeds `omega`
+    /// into the candidate slot (`second`: the other free one, see
+    /// [`Twin::build_slot`]), moving the model it holds if it is that one (see
+    /// [`Slot::reposition`]), and evaluates its equations of motion (not the
     /// kinetostatics); `false` if it does not assemble, fails, or cannot carry the
     /// speeds (its gap is left in `speed_gap`).
     #[allow(clippy::too_many_arguments)]
@@ -1515,12 +1690,17 @@ impl<T: Real> Twin<T> {
         omega: &[T; 9],
         inputs: &Inputs<T>,
         scale_w: T,
+        second: bool,
     ) -> bool {
         let time = w.t.to_f64();
         let drive = self.drive;
-        let (cand, params) = self.scratch(w.switched);
-        let Ok(q) = cand.rebuild(params, m, coords, pose, time) else {
-            return false;
+        let (cand, params) = self.build_slot(w.switched, second);
+        let q = match cand.reposition(params, m, coords, pose, time) {
+            Ok(q) => q,
+            Err(e) => {
+                log::debug!("candidate {m} in {coords} coordinates does not assemble: {e:?}");
+                return false;
+            }
         };
         let mut y = w.y;
         load_state(cand, &q, omega, &mut y);
@@ -1559,11 +1739,8 @@ impl<T: Real> Twin<T> {
         // another choice is taken only if it beats `now` by 1.5.
         let skip = Some(self.slot.coords);
         // The reference slot is the spare: the mode choice builds it again.
-        let scratch = if w.switched {
-            &mut self.cand
-        } else {
-            &mut self.backup
-        };
+        let (backup, cand) = spare_roles(&mut self.spares, self.backup_at);
+        let scratch = if w.switched { cand } else { backup };
         let mut failures = scan_choices(
             &self.params,
             mode,
@@ -1943,6 +2120,99 @@ fn project<T: Real>(
 
 fn rows_mismatch<T: Real>(rows: &[SVector<T, 3>], u: &SVector<T, 3>) -> T {
     rows.iter().fold(T::zero(), |m, r| m.max(r.dot(u).abs()))
+}
+
+/// The root in (0, 1) of the cubic Hermite interpolant of an event function over a
+/// step, `p(0) = g0 ≤ 0 < p(1) = g1` with slopes `s0`, `s1` (per unit of the step's
+/// fraction θ: h·dg/dt), to `tol`/100 ([`bracketed_root`]). No evaluation of the
+/// mechanism: the first point of [`Twin::locate`]'s iteration, O(h⁴) from the true
+/// crossing. `None` if the values do not bracket a root.
+fn hermite_root<T: Real>(g0: T, g1: T, s0: T, s1: T, tol: T) -> Option<T> {
+    if !(s0.finite() && s1.finite()) {
+        return None;
+    }
+    let one = T::one();
+    let (two, three, six) = (T::c(2.0), T::c(3.0), T::c(6.0));
+    // p(θ) = h00 g0 + h10 s0 + h01 g1 + h11 s1 and p'(θ).
+    bracketed_root(
+        |th: T| {
+            let u = one - th;
+            let value = (one + two * th) * u * u * g0
+                + th * u * u * s0
+                + th * th * (three - two * th) * g1
+                + th * th * (th - one) * s1;
+            let slope = six * th * (th - one) * (g0 - g1)
+                + (three * th * th - T::c(4.0) * th + one) * s0
+                + (three * th * th - two * th) * s1;
+            (value, slope)
+        },
+        g0,
+        g1,
+        tol,
+    )
+}
+
+/// The root in (0, 1) of the quadratic through an event function's values `g0 ≤ 0`
+/// and `g1 > 0` at the step's ends and `gm` at θ = -r (the start of the step before,
+/// `r` its length over this one's), to `tol`/100; O(h³) from the true crossing. For
+/// the torque functions, whose rates the evaluation does not give. `None` if the
+/// values do not bracket a root.
+fn quadratic_root<T: Real>(gm: T, r: T, g0: T, g1: T, tol: T) -> Option<T> {
+    // p(θ) = g0 + a θ + b θ², p(1) = g1, p(-r) = gm.
+    let b = (gm - g0 + r * (g1 - g0)) / (r * (T::one() + r));
+    let a = g1 - g0 - b;
+    if !(a.finite() && b.finite()) {
+        return None;
+    }
+    bracketed_root(
+        |th: T| (g0 + th * (a + th * b), a + T::c(2.0) * th * b),
+        g0,
+        g1,
+        tol,
+    )
+}
+
+/// The root in (0, 1) of an interpolant `p` (value, slope) of an event function with
+/// `p(0) = g0 ≤ 0 < p(1) = g1`, to `tol`/100: safeguarded Newton from the linear
+/// root (bisection whenever Newton leaves the bracket; at most 40 iterations, usually
+/// 3). `None` if the values do not bracket a root.
+fn bracketed_root<T: Real>(p: impl Fn(T) -> (T, T), g0: T, g1: T, tol: T) -> Option<T> {
+    if !(g0 <= T::zero() && g1 > T::zero()) {
+        return None;
+    }
+    let (mut a, mut b) = (T::zero(), T::one());
+    let mut th = g0 / (g0 - g1);
+    for _ in 0..40 {
+        let (v, dv) = p(th);
+        if v > T::zero() {
+            b = th;
+        } else {
+            a = th;
+        }
+        let newton = th - v / dv;
+        let next = if newton.finite() && newton > a && newton < b {
+            newton
+        } else {
+            (a + b) * T::c(0.5)
+        };
+        let moved = (next - th).abs();
+        th = next;
+        if moved <= tol * T::c(0.01) || b - a <= tol * T::c(0.01) {
+            break;
+        }
+    }
+    th.finite().then_some(th)
+}
+
+/// The twin's spare slots as `(backup, candidate)`: `backup_at` says which of the two
+/// is the backup.
+fn spare_roles<T: Real>(spares: &mut [Slot<T>; 2], backup_at: u8) -> (&mut Slot<T>, &mut Slot<T>) {
+    let [a, b] = spares;
+    if backup_at == 0 {
+        (a, b)
+    } else {
+        (b, a)
+    }
 }
 
 /// Which of the event functions went from ≤ 0 to > 0 (bit k: function k).

@@ -9,7 +9,7 @@
 //! The right-hand sides are the same derivatives evaluated with the group's unknown
 //! rates (or accelerations) set to zero, so no term is written twice.
 
-use super::{Angle, Base, Chain, Group, Length, Placement, PointRef, Term};
+use super::{Angle, Base, Chain, Group, GroupKind, Length, Placement, PointRef, Term};
 use crate::config::{MAX_CHAINS, MAX_DOF, MAX_GROUP_VARS, MAX_TERMS};
 use crate::error::GroupFault;
 use crate::model::Model;
@@ -68,7 +68,8 @@ pub struct GroupData<T: Real> {
     pub xdd_bias: [T; MAX_GROUP_VARS],
     /// The coordinates and unknowns at which `dx_dq` was last recorded: Newton-Raphson
     /// starts from the first-order prediction `x + C (q - q_C)` when its warm start is
-    /// still that `x` ([`newton`](super::newton)).
+    /// still that `x` ([`newton`](super::newton)). Recorded for the groups Newton
+    /// solves only ([`GroupKind::solved_by_newton`]): the others never read it.
     pub dx_dq_at: ([T; MAX_DOF], [T; MAX_GROUP_VARS]),
 }
 
@@ -746,7 +747,11 @@ pub(crate) fn velocity_pass<T: Real>(
     bodies: &mut [BodyState<T>],
     qd: &[T],
 ) {
-    linear_pass(g, gd, model, bodies, &Vel { qd });
+    match g.kind {
+        GroupKind::Rrr => super::dyad_rrr::velocity(g, gd, model, bodies),
+        GroupKind::MotorR => super::motor_r::velocity(g, gd, model, bodies, qd),
+        _ => linear_pass(g, gd, model, bodies, &Vel { qd }),
+    }
 }
 
 /// Solves `W ẍ = -(f̈ with ẍ = 0)` and sets the links' accelerations (needs the
@@ -759,7 +764,11 @@ pub(crate) fn acceleration_pass<T: Real>(
     qd: &[T],
     qdd: &[T],
 ) {
-    linear_pass(g, gd, model, bodies, &Acc { qd, qdd });
+    match g.kind {
+        GroupKind::Rrr => super::dyad_rrr::acceleration(g, gd, model, bodies),
+        GroupKind::MotorR => super::motor_r::acceleration(g, gd, model, bodies, qdd),
+        _ => linear_pass(g, gd, model, bodies, &Acc { qd, qdd }),
+    }
 }
 
 /// The closing chain of a dyad and its end pole (the closed forms' common start).

@@ -5,12 +5,13 @@
 //! circle(A, la) and circle(B, lb); branch +1 puts C to the left of A→B.
 
 use super::{
-    chain, guesses, list, point_pos, Angle, Base, Group, GroupData, GroupKind, Joint, JointKind,
-    Placement, PointRef, Term,
+    chain, guesses, list, point_acc, point_pos, point_vel, Angle, Base, Group, GroupData,
+    GroupKind, Joint, JointKind, Placement, PointRef, Term, TermCache,
 };
+use crate::config::MAX_GROUP_VARS;
 use crate::error::{GroupFault, ModelError};
 use crate::model::Model;
-use crate::scalar::{perp, Real, Vec2};
+use crate::scalar::{cross, perp, rotate_cs, Real, Vec2};
 use crate::workspace::BodyState;
 
 /// Dyad RRR.
@@ -128,18 +129,40 @@ impl<T: Real> DyadRrr<T> {
     }
 }
 
-/// Closed-form position on the branch `gd.branch`: writes `gd.x` and the links' cosines
-/// and sines (`gd.trig`, straight from the constructed vectors: no trigonometry but the
-/// two `atan2` that record the angles).
+/// Poles A and B, placements of links a and b.
+type Parts<'g, T> = (PointRef, PointRef, &'g Placement<T>, &'g Placement<T>);
+
+/// The dyad's poles A and B and the placements of its links a (anchored at A) and b
+/// (anchored at C), as [`DyadRrr::build`] lays them out.
+#[inline]
+fn parts<T: Real>(g: &Group<T>) -> Result<Parts<'_, T>, GroupFault> {
+    let (ch, end) = super::chain::closing_chain(g)?;
+    let (Some(pa), Some(pb)) = (g.placements.first(), g.placements.get(1)) else {
+        return Err(GroupFault::NonFiniteInput);
+    };
+    Ok((ch.start, end, pa, pb))
+}
+
+/// Closed-form position on the branch `gd.branch`, with everything the linear passes
+/// and the kinetostatics need: `gd.x`, the links' cosines and sines (`gd.trig`,
+/// straight from the constructed vectors: no trigonometry but the two `atan2` that
+/// record the angles), the terms (`gd.cache`), `W⁻¹` and the conditioning, and the
+/// links' poses. Returns det W.
+///
+/// With the joint C constructed, the terms are `w_a = R(θa) va = C - A` and
+/// `w_b = -R(θb) wb = B - C`, `W = [J w_a, J w_b]`, `det W = w_a × w_b`, and the
+/// column norms are the link lengths: the conditioning `|w_a × w_b| / (la lb)` is the
+/// sine of the transmission angle at C.
 pub(crate) fn solve<T: Real>(
     g: &Group<T>,
     gd: &mut GroupData<T>,
     model: &Model<T>,
-    bodies: &[BodyState<T>],
-) -> Result<(), GroupFault> {
-    let (ch, end) = super::chain::closing_chain(g)?;
+    bodies: &mut [BodyState<T>],
+    singular_tol: T,
+) -> Result<T, GroupFault> {
+    let (start, end, pl_a, pl_b) = parts(g)?;
     let [la, lb, ca, sa, cb, sb, alpha_a, alpha_b] = g.consts;
-    let a = point_pos(model, bodies, ch.start);
+    let a = point_pos(model, bodies, start);
     let b = point_pos(model, bodies, end);
     let d = b - a;
     let dist = d.norm();
@@ -159,11 +182,129 @@ pub(crate) fn solve<T: Real>(
     }
     let e = d / dist;
     let c = a + e * along + perp(&e) * (gd.branch * h2.sqrt());
-    let (ua, ub) = ((c - a) / la, (c - b) / lb);
+    let (wa, wb) = (c - a, b - c);
+    let (ua, ub) = (wa / la, -wb / lb);
     // θ = ∠u - α: turn u back by α.
-    gd.trig[0] = Vec2::new(ua.x * ca + ua.y * sa, ua.y * ca - ua.x * sa);
-    gd.trig[1] = Vec2::new(ub.x * cb + ub.y * sb, ub.y * cb - ub.x * sb);
-    gd.x[0] = ua.y.atan2(ua.x) - alpha_a;
-    gd.x[1] = ub.y.atan2(ub.x) - alpha_b;
-    Ok(())
+    let trig_a = Vec2::new(ua.x * ca + ua.y * sa, ua.y * ca - ua.x * sa);
+    let trig_b = Vec2::new(ub.x * cb + ub.y * sb, ub.y * cb - ub.x * sb);
+    let (theta_a, theta_b) = (ua.y.atan2(ua.x) - alpha_a, ub.y.atan2(ub.x) - alpha_b);
+    gd.x[0] = theta_a;
+    gd.x[1] = theta_b;
+    gd.trig[0] = trig_a;
+    gd.trig[1] = trig_b;
+    if let Some(row) = gd.cache.first_mut() {
+        row[0] = TermCache {
+            w: wa,
+            s: T::zero(),
+        };
+        row[1] = TermCache {
+            w: wb,
+            s: T::zero(),
+        };
+    }
+    let det = cross(&wa, &wb);
+    let cond = det.abs() / (la * lb);
+    gd.conditioning = cond;
+    if !(cond > singular_tol) {
+        return Err(GroupFault::Singular {
+            conditioning: cond.to_f64(),
+        });
+    }
+    // W = [[-wa.y, -wb.y], [wa.x, wb.x]]: its inverse in closed form.
+    let id = T::one() / det;
+    for ((r, k), v) in [
+        ((0, 0), wb.x * id),
+        ((0, 1), wb.y * id),
+        ((1, 0), -wa.x * id),
+        ((1, 1), -wa.y * id),
+    ] {
+        if let Some(m) = gd.w_inv.get_mut((r, k)) {
+            *m = v;
+        }
+    }
+    if let Some(s) = bodies.get_mut(pl_a.link as usize) {
+        s.theta = theta_a;
+        (s.c, s.s) = (trig_a.x, trig_a.y);
+        s.o = a - rotate_cs(trig_a.x, trig_a.y, &pl_a.local);
+    }
+    if let Some(s) = bodies.get_mut(pl_b.link as usize) {
+        s.theta = theta_b;
+        (s.c, s.s) = (trig_b.x, trig_b.y);
+        s.o = c - rotate_cs(trig_b.x, trig_b.y, &pl_b.local);
+    }
+    Ok(det)
+}
+
+/// `W⁻¹ r` for the dyad's 2 × 2 block.
+#[inline]
+fn solve_2<T: Real>(gd: &GroupData<T>, r: Vec2<T>) -> [T; 2] {
+    let m = |i: usize, k: usize| gd.w_inv.get((i, k)).copied().unwrap_or(T::zero());
+    [m(0, 0) * r.x + m(0, 1) * r.y, m(1, 0) * r.x + m(1, 1) * r.y]
+}
+
+/// Velocity pass of the dyad (the linear pass of [`chain`](super::chain) written out
+/// for its two arms): `W ẋ = v_B - v_A` (the arms turn only with the unknowns), then
+/// link a turns about A at `θ̇a` and link b about C, whose velocity is
+/// `v_A + θ̇a J w_a`.
+pub(crate) fn velocity<T: Real>(
+    g: &Group<T>,
+    gd: &mut GroupData<T>,
+    model: &Model<T>,
+    bodies: &mut [BodyState<T>],
+) {
+    let Ok((start, end, pl_a, pl_b)) = parts(g) else {
+        return;
+    };
+    let va = point_vel(model, bodies, start);
+    let vb = point_vel(model, bodies, end);
+    let [wd_a, wd_b] = solve_2(gd, vb - va);
+    let mut xd = [T::zero(); MAX_GROUP_VARS];
+    xd[0] = wd_a;
+    xd[1] = wd_b;
+    gd.xd = xd;
+    let wa = gd.cache[0][0].w;
+    if let Some(s) = bodies.get_mut(pl_a.link as usize) {
+        let r = rotate_cs(s.c, s.s, &pl_a.local);
+        s.omega = wd_a;
+        s.v = va - perp(&r) * wd_a;
+    }
+    if let Some(s) = bodies.get_mut(pl_b.link as usize) {
+        let r = rotate_cs(s.c, s.s, &pl_b.local);
+        s.omega = wd_b;
+        s.v = va + perp(&wa) * wd_a - perp(&r) * wd_b;
+    }
+}
+
+/// Acceleration pass of the dyad (after its velocity pass):
+/// `W ẍ = a_B - a_A + θ̇a² w_a + θ̇b² w_b` (the arms' centripetal parts), then link a
+/// about A and link b about C, whose acceleration is `a_A + θ̈a J w_a - θ̇a² w_a`.
+pub(crate) fn acceleration<T: Real>(
+    g: &Group<T>,
+    gd: &mut GroupData<T>,
+    model: &Model<T>,
+    bodies: &mut [BodyState<T>],
+) {
+    let Ok((start, end, pl_a, pl_b)) = parts(g) else {
+        return;
+    };
+    let aa = point_acc(model, bodies, start);
+    let ab = point_acc(model, bodies, end);
+    let (wa, wb) = (gd.cache[0][0].w, gd.cache[0][1].w);
+    let (wd_a, wd_b) = (gd.xd[0], gd.xd[1]);
+    let ca = wa * (wd_a * wd_a);
+    let [wdd_a, wdd_b] = solve_2(gd, ab - aa + ca + wb * (wd_b * wd_b));
+    let mut xdd = [T::zero(); MAX_GROUP_VARS];
+    xdd[0] = wdd_a;
+    xdd[1] = wdd_b;
+    gd.xdd = xdd;
+    if let Some(s) = bodies.get_mut(pl_a.link as usize) {
+        let r = rotate_cs(s.c, s.s, &pl_a.local);
+        s.alpha = wdd_a;
+        s.a = aa - perp(&r) * wdd_a + r * (s.omega * s.omega);
+    }
+    if let Some(s) = bodies.get_mut(pl_b.link as usize) {
+        let r = rotate_cs(s.c, s.s, &pl_b.local);
+        s.alpha = wdd_b;
+        s.a = aa + perp(&wa) * wdd_a - ca - perp(&r) * wdd_b + r * (s.omega * s.omega);
+    }
 }

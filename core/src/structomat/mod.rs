@@ -77,6 +77,17 @@ pub enum GroupKind {
 }
 
 impl GroupKind {
+    /// Whether its position is solved by Newton-Raphson ([`newton`]): the triad, the
+    /// general Assur group, and the dyads with linear loop closures (TRT, RTT: one
+    /// step from anywhere is exact). Only these read the transmission functions
+    /// recorded at the last evaluation (`GroupData::dx_dq_at`, Newton's predictor).
+    pub fn solved_by_newton(self) -> bool {
+        matches!(
+            self,
+            GroupKind::Trt | GroupKind::Rtt | GroupKind::Triad | GroupKind::Assur
+        )
+    }
+
     /// The thesis's symbol, as used in structomatic formulas (`RRR(2,3)`).
     pub fn symbol(self) -> &'static str {
         match self {

@@ -1,11 +1,16 @@
 //! Motor element R (thesis figure 11a): a link turning about a known point; its
 //! absolute angle is a generalized coordinate, `θ = q_j + offset`.
 
-use super::{chain, list, Angle, Base, Group, GroupKind, Joint, JointKind, Placement, PointRef};
+use super::chain::angle_cs;
+use super::{
+    chain, list, point_acc, point_pos, point_vel, Angle, Base, Group, GroupData, GroupKind, Joint,
+    JointKind, Placement, PointRef,
+};
 use crate::config::MAX_GROUP_VARS;
-use crate::error::ModelError;
+use crate::error::{GroupFault, ModelError};
 use crate::model::Model;
-use crate::scalar::Real;
+use crate::scalar::{perp, rotate_cs, Real};
+use crate::workspace::BodyState;
 
 /// Motor element R.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -65,5 +70,84 @@ impl<T: Real> MotorR<T> {
             consts: [T::zero(); 8],
             coord: Some(self.coord),
         })
+    }
+}
+
+/// The element's pivot, its placement, and the coordinate its angle is (see
+/// [`MotorR::build`]); `None` for a group of another shape.
+#[inline]
+fn parts<T: Real>(g: &Group<T>) -> Option<(PointRef, &Placement<T>, usize)> {
+    let p = g.placements.first()?;
+    let Base::Coord(j) = p.angle.base else {
+        return None;
+    };
+    Some((g.chains.first()?.start, p, j as usize))
+}
+
+#[inline]
+fn get<T: Real>(v: &[T], j: usize) -> T {
+    v.get(j).copied().unwrap_or(T::zero())
+}
+
+/// Position: the link at `θ = q_j + offset` about its pivot (no unknowns: W is empty,
+/// its conditioning 1). Returns det W = 1.
+pub(crate) fn position<T: Real>(
+    g: &Group<T>,
+    gd: &mut GroupData<T>,
+    model: &Model<T>,
+    bodies: &mut [BodyState<T>],
+    q: &[T],
+) -> Result<T, GroupFault> {
+    let (pivot, p, j) = parts(g).ok_or(GroupFault::NonFiniteInput)?;
+    gd.conditioning = T::one();
+    let anchor = point_pos(model, bodies, pivot);
+    let cs = angle_cs(&p.angle, &gd.trig, q, bodies);
+    if let Some(b) = bodies.get_mut(p.link as usize) {
+        b.theta = get(q, j) + p.angle.offset;
+        (b.c, b.s) = (cs.x, cs.y);
+        b.o = anchor - rotate_cs(cs.x, cs.y, &p.local);
+    }
+    Ok(T::one())
+}
+
+/// Velocity pass: `ω = q̇_j`, the link turning about its pivot.
+pub(crate) fn velocity<T: Real>(
+    g: &Group<T>,
+    gd: &mut GroupData<T>,
+    model: &Model<T>,
+    bodies: &mut [BodyState<T>],
+    qd: &[T],
+) {
+    let Some((pivot, p, j)) = parts(g) else {
+        return;
+    };
+    gd.xd = [T::zero(); MAX_GROUP_VARS];
+    let anchor = point_vel(model, bodies, pivot);
+    let rate = get(qd, j);
+    if let Some(b) = bodies.get_mut(p.link as usize) {
+        let r = rotate_cs(b.c, b.s, &p.local);
+        b.omega = rate;
+        b.v = anchor - perp(&r) * rate;
+    }
+}
+
+/// Acceleration pass (after the velocity pass): `α = q̈_j`.
+pub(crate) fn acceleration<T: Real>(
+    g: &Group<T>,
+    gd: &mut GroupData<T>,
+    model: &Model<T>,
+    bodies: &mut [BodyState<T>],
+    qdd: &[T],
+) {
+    let Some((pivot, p, j)) = parts(g) else {
+        return;
+    };
+    gd.xdd = [T::zero(); MAX_GROUP_VARS];
+    let anchor = point_acc(model, bodies, pivot);
+    let rate = get(qdd, j);
+    if let Some(b) = bodies.get_mut(p.link as usize) {
+        let r = rotate_cs(b.c, b.s, &p.local);
+        b.alpha = rate;
+        b.a = anchor - perp(&r) * rate + r * (b.omega * b.omega);
     }
 }
