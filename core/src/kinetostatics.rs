@@ -454,7 +454,9 @@ impl<T: Real> Equilibrium<T> {
             let beta = Vector3::from(cramer(&c, &-*load));
             *af = (
                 beta,
-                [0, 1].map(|k| Vector3::from(cramer(&c, &(wa[k] * sign)))),
+                // (No index into `wa`: at opt-level "s" the map over [0, 1] kept its
+                // bounds check, a panic path the firmware check refuses.)
+                wa.map(|w| Vector3::from(cramer(&c, &(w * sign)))),
             );
         }
         // `A x = b`: per link's kept rows, `-L` and the kept inner joints' wrench
