@@ -22,6 +22,8 @@
 //!
 //! `twin-f64-log` lists S2's steps (first second) that hold an event, a coordinate
 //! switch or a mode change: the indices to give `twin-f64-at`.
+//! With `STEPS_LOG` set in the environment, the core's `log` records (debug level:
+//! each event's location, the candidate modes, the coordinate scans) are printed too.
 
 use std::hint::black_box;
 use std::process::ExitCode;

@@ -911,12 +911,17 @@ impl<T: Real> Twin<T> {
 
     /// Evaluates the current slot at `w`'s state: equations of motion, accelerations,
     /// kinetostatics, the event functions.
-    /// The next DP5 step from `w`'s state takes its first stage from this evaluation.
-    fn finish(&mut self, w: &mut Work<T>, inputs: &Inputs<T>) -> Result<(), TwinError> {
+    fn evaluate_at(&mut self, w: &Work<T>, inputs: &Inputs<T>) -> Result<(), TwinError> {
         self.slot
             .eval(w.t, &w.y, inputs, self.drive)
             .map_err(|e| self.physical_error(e))?;
-        self.finish_evaluated(w, inputs)?;
+        self.finish_evaluated(w, inputs)
+    }
+
+    /// [`Twin::evaluate_at`] where the integration goes on from `w`'s state: the next
+    /// DP5 step from there takes its first stage from this evaluation.
+    fn finish(&mut self, w: &mut Work<T>, inputs: &Inputs<T>) -> Result<(), TwinError> {
+        self.evaluate_at(w, inputs)?;
         self.seed_first_stage(w, inputs);
         Ok(())
     }
@@ -1133,7 +1138,8 @@ impl<T: Real> Twin<T> {
                 // torque functions are not read (none of them fired).
                 self.guards = self.guards_of(&self.slot, &links, &self.c, inputs);
             } else {
-                self.finish(w, inputs)?;
+                // A point of the bracket, not where the step goes on from: no seed.
+                self.evaluate_at(w, inputs)?;
             }
             let (g, k) = pick(&self.guards);
             at_hi = g > T::zero();
@@ -1437,8 +1443,8 @@ impl<T: Real> Twin<T> {
         let mut kept: Option<bool> = None;
         // Before the step changed the current slot, two slots are free: the choice
         // kept so far stays in one while the next is built in the other, so none is
-        // built twice, and the one not taken stays built for the end-of-step scan of
-        // `switch_coordinates`, which then moves it instead of building it again.
+        // built twice (with one slot, a kept choice that a later, worse one overwrote
+        // is built again at the end).
         let two = !w.switched;
         // A choice whose coordinate link stands still (under `speed_tol` of the largest
         // speed) while the mechanism moves (a shaft stop can leave it all at rest) is
