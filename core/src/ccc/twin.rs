@@ -411,12 +411,8 @@ pub struct Twin<T: Real> {
     params: CccParams<T>,
     settings: TwinSettings<T>,
     drive: T,
-    slot: Slot<T>,
-    /// The backup slot and the candidate slot (see [`Twin::scratch`]), which is which
-    /// set by `backup_at` ([`spare_roles`]): the mode choice hands the backup's role to
-    /// the slot that holds its pick by flipping it, not by swapping 30 KB.
-    spares: [Slot<T>; 2],
-    backup_at: u8,
+    /// The current slot, the backup and the candidate slot ([`Slots`]).
+    slots: Slots<T>,
     reference: Slot<T>,
     dp5: Dp5<T, STATE>,
     y: SVector<T, STATE>,
@@ -518,10 +514,11 @@ impl<T: Real> Twin<T> {
             drive: params.drive.sign(),
             params,
             settings,
-            spares: [slot.clone(), spare],
-            backup_at: 0,
             reference: slot.clone(),
-            slot,
+            slots: Slots {
+                s: [slot.clone(), slot, spare],
+                role: [0, 1, 2],
+            },
             dp5: Dp5::new(),
             y,
             t: T::zero(),
@@ -555,7 +552,7 @@ impl<T: Real> Twin<T> {
             twin.choose(&mut w, EventKind::Start, &inputs)?;
         }
         twin.y = w.y;
-        let links = twin.slot.links(&twin.params);
+        let links = twin.slots.cur().links(&twin.params);
         let audit = twin.audit_of(&links, &w);
         audit_finite(&audit, w.t)?;
         twin.commit(&w, audit, links);
@@ -663,7 +660,7 @@ impl<T: Real> Twin<T> {
         }
         Some(TwinError::Diode {
             time: self.t.to_f64(),
-            mode: self.slot.mode,
+            mode: self.slots.cur().mode,
             reach: reach.to_f64(),
             sines,
             stretched_reach,
@@ -685,8 +682,8 @@ impl<T: Real> Twin<T> {
 
     /// The audit at the end of a step in `w` (the slot holds its evaluation).
     fn audit_of(&self, links: &[LinkState<T>; 9], w: &Work<T>) -> Audit<T> {
-        let shaft = shaft_speed(self.slot.mode, links);
-        let frames = self.slot.frames();
+        let shaft = shaft_speed(self.slots.cur().mode, links);
+        let frames = self.slots.cur().frames();
         let (kinetic, potential) = physical_energy(&self.params, links, &frames, shaft);
         Audit {
             motor_work: w.y[W_MOTOR],
@@ -702,7 +699,7 @@ impl<T: Real> Twin<T> {
     /// from (the state [`Twin::commit`] takes), or an error if its residual moved past
     /// the tolerance over the step.
     fn check_energy(&self, w: &Work<T>) -> Result<(Audit<T>, [LinkState<T>; 9]), TwinError> {
-        let links = self.slot.links(&self.params);
+        let links = self.slots.cur().links(&self.params);
         let a = self.audit_of(&links, w);
         audit_finite(&a, w.t)?;
         let jump = a.residual() - self.audit.residual();
@@ -710,13 +707,13 @@ impl<T: Real> Twin<T> {
         if jump.abs() <= self.settings.energy_tol * scale {
             return Ok((a, links));
         }
-        let (group, conditioning) = self.slot.worst_group();
+        let (group, conditioning) = self.slots.cur().worst_group();
         Err(TwinError::Diverged {
             time: self.t.to_f64(),
-            mode: self.slot.mode,
+            mode: self.slots.cur().mode,
             jump: jump.to_f64(),
             worst: Failure {
-                coords: self.slot.coords,
+                coords: self.slots.cur().coords,
                 group,
                 fault: GroupFault::Singular {
                     conditioning: conditioning.to_f64(),
@@ -753,7 +750,7 @@ impl<T: Real> Twin<T> {
         let mut retries = 0;
         let mut events = 0;
         while w.t < t_end {
-            if self.slot.mode == Mode::Jam {
+            if self.slots.cur().mode == Mode::Jam {
                 // At rest: nothing moves until the inputs make another mode consistent.
                 w.t = t_end;
                 self.finish(w, inputs)?;
@@ -769,7 +766,7 @@ impl<T: Real> Twin<T> {
                 t_end - t0
             };
             let mut sys = Equations {
-                slot: &mut self.slot,
+                slot: self.slots.cur_mut(),
                 inputs,
                 drive: self.drive,
             };
@@ -805,7 +802,8 @@ impl<T: Real> Twin<T> {
                 w.y = ye;
                 // The mode choice reads the old mode's positions and speeds only (the
                 // new mode is evaluated in full): no accelerations or kinetostatics.
-                self.slot
+                self.slots
+                    .cur_mut()
                     .eval_speeds(w.t, &w.y)
                     .map_err(|e| self.physical_error(e))?;
             }
@@ -817,9 +815,9 @@ impl<T: Real> Twin<T> {
         // again cost 24k instructions at S2's catches into A68, whose lever choice is
         // then at its dead point (the lever stops as it catches) and fails to assemble
         // each time. The next step's end scans as usual.
-        if self.slot.mode != Mode::Jam
+        if self.slots.cur().mode != Mode::Jam
             && !w.chosen
-            && self.slot.conditioning() < self.settings.switch_below
+            && self.slots.cur().conditioning() < self.settings.switch_below
         {
             self.switch_coordinates(w, inputs, None)?;
         }
@@ -836,7 +834,7 @@ impl<T: Real> Twin<T> {
     /// [`Twin::take_candidate`] keeps the pre-step slot as the backup with one swap, no
     /// copy (a slot is 30 KB in f64).
     fn scratch(&mut self, switched: bool) -> (&mut Slot<T>, &CccParams<T>) {
-        let (backup, cand) = spare_roles(&mut self.spares, self.backup_at);
+        let (backup, cand) = self.slots.spares();
         (if switched { cand } else { backup }, &self.params)
     }
 
@@ -845,10 +843,7 @@ impl<T: Real> Twin<T> {
     /// candidate slot, the other one free then.
     fn build_slot(&mut self, switched: bool, second: bool) -> (&mut Slot<T>, &CccParams<T>) {
         if second && !switched {
-            (
-                spare_roles(&mut self.spares, self.backup_at).1,
-                &self.params,
-            )
+            (self.slots.spares().1, &self.params)
         } else {
             self.scratch(switched)
         }
@@ -858,11 +853,11 @@ impl<T: Real> Twin<T> {
     /// coordinates, the current one; the first time in a step the pre-step slot goes
     /// to the backup.
     fn take_candidate(&mut self, w: &mut Work<T>) {
-        let (backup, cand) = spare_roles(&mut self.spares, self.backup_at);
+        let r = &mut self.slots.role;
         if w.switched {
-            core::mem::swap(&mut self.slot, cand);
+            r.swap(0, 2);
         } else {
-            core::mem::swap(&mut self.slot, backup);
+            r.swap(0, 1);
             w.switched = true;
         }
     }
@@ -875,10 +870,7 @@ impl<T: Real> Twin<T> {
         saved: &[[T; crate::config::MAX_GROUP_VARS]; crate::config::MAX_GROUPS],
     ) {
         if switched {
-            core::mem::swap(
-                &mut self.slot,
-                spare_roles(&mut self.spares, self.backup_at).0,
-            );
+            self.slots.role.swap(0, 1);
         }
         self.set_group_unknowns(saved);
         self.dp5.invalidate();
@@ -892,7 +884,8 @@ impl<T: Real> Twin<T> {
 
     fn group_unknowns(&self) -> [[T; crate::config::MAX_GROUP_VARS]; crate::config::MAX_GROUPS] {
         core::array::from_fn(|k| {
-            self.slot
+            self.slots
+                .cur()
                 .ws
                 .group
                 .get(k)
@@ -904,7 +897,7 @@ impl<T: Real> Twin<T> {
         &mut self,
         x: &[[T; crate::config::MAX_GROUP_VARS]; crate::config::MAX_GROUPS],
     ) {
-        for (g, x) in self.slot.ws.group.iter_mut().zip(x.iter()) {
+        for (g, x) in self.slots.cur_mut().ws.group.iter_mut().zip(x.iter()) {
             g.x = *x;
         }
     }
@@ -912,7 +905,8 @@ impl<T: Real> Twin<T> {
     /// Evaluates the current slot at `w`'s state: equations of motion, accelerations,
     /// kinetostatics, the event functions.
     fn evaluate_at(&mut self, w: &Work<T>, inputs: &Inputs<T>) -> Result<(), TwinError> {
-        self.slot
+        self.slots
+            .cur_mut()
             .eval(w.t, &w.y, inputs, self.drive)
             .map_err(|e| self.physical_error(e))?;
         self.finish_evaluated(w, inputs)
@@ -930,16 +924,16 @@ impl<T: Real> Twin<T> {
     /// stepper as the first stage of a step from there: after a mode change or a
     /// coordinate switch the rest of the step then takes 6 evaluations, not 7.
     fn seed_first_stage(&mut self, w: &Work<T>, inputs: &Inputs<T>) {
-        let k1 = self.slot.rates(&w.y, inputs, self.drive);
+        let k1 = self.slots.cur().rates(&w.y, inputs, self.drive);
         self.dp5.seed(w.t, &w.y, &k1);
     }
 
     /// [`Twin::finish`] when the slot's workspace already holds the evaluation of `w`'s
     /// state (after an accepted DP5 step, whose last stage is `f(t1, y1)`, FSAL).
     fn finish_evaluated(&mut self, w: &Work<T>, inputs: &Inputs<T>) -> Result<(), TwinError> {
-        finish_accelerations(&self.slot.model, &mut self.slot.ws);
-        reactions(&self.slot.model, &mut self.slot.ws, w.t.to_f64())
-            .map_err(|e| self.physical_error(e))?;
+        let slot = self.slots.cur_mut();
+        finish_accelerations(&slot.model, &mut slot.ws);
+        reactions(&slot.model, &mut slot.ws, w.t.to_f64()).map_err(|e| self.physical_error(e))?;
         self.read_evaluation(inputs);
         Ok(())
     }
@@ -950,10 +944,10 @@ impl<T: Real> Twin<T> {
     /// (`tests/footprint.rs`: 19.1 KB instead of 15.5 KB).
     #[inline(never)]
     fn read_evaluation(&mut self, inputs: &Inputs<T>) {
-        let links = self.slot.links(&self.params);
-        self.c = self.slot.clutch_torques(&self.params, &links);
-        self.guards = self.guards_of(&self.slot, &links, &self.c, inputs);
-        self.guard_rates = self.guard_rates_of(&self.slot, &links);
+        let links = self.slots.cur().links(&self.params);
+        self.c = self.slots.cur().clutch_torques(&self.params, &links);
+        self.guards = self.guards_of(self.slots.cur(), &links, &self.c, inputs);
+        self.guard_rates = self.guard_rates_of(self.slots.cur(), &links);
     }
 
     /// The time derivatives of [`Twin::guards_of`]'s speed functions at `slot`'s
@@ -1043,6 +1037,15 @@ impl<T: Real> Twin<T> {
     /// starts from the root of its quadratic through the step's ends and the start of
     /// the step before ([`quadratic_root`]), if that step had no event.
     ///
+    /// The iteration ends when the bracket is within the tolerance, or sooner when a
+    /// point past the crossing is within the tolerance of the secant's crossing through
+    /// it and the point before, both `near` the crossing (the secant's error is then
+    /// second order in their distances, ~1e-10 of the tolerance). Near the crossing it
+    /// aims just past it (0.4 tol): from the guess by a Newton step on the
+    /// interpolant's slope, then by that secant. S2's events take 2 evaluations (some
+    /// torque events 3) instead of 2–5: a bracket closed on both sides needs a point
+    /// on each, and the guess is rarely within the tolerance.
+    ///
     /// Not inlined, nor is [`Twin::try_candidate`]: with both inlined the f64 step's
     /// stack high-water was 20.6 KB instead of 16.7 KB (`tests/footprint.rs`).
     #[inline(never)]
@@ -1083,7 +1086,11 @@ impl<T: Real> Twin<T> {
         let before = self
             .last_guards
             .and_then(|(g, hp)| g.get(k).copied().flatten().map(|v| (v, hp / h)));
-        let mut guess = match (
+        // Two points this close to each other bracket... or not, but their secant
+        // places the crossing to about near²·|g''/g'| (θ units), 1e-10 in f64 for a
+        // curvature |g''/g'| of 1 per step: far below `tol`.
+        let near = (tol * T::c(0.01)).sqrt();
+        let guess = match (
             g0.get(k),
             self.guards.get(k),
             r0.get(k),
@@ -1101,6 +1108,11 @@ impl<T: Real> Twin<T> {
         };
         let mut at_hi = false;
         let mut used = 0;
+        // The last evaluated point (θ, its event function, not Illinois-scaled), and
+        // the interpolant's slope at the guess, for the estimates below.
+        let mut last: Option<(T, T)> = None;
+        let mut slope = guess.map(|(_, s)| s);
+        let mut guess = guess.map(|(th, _)| th);
         for _ in 0..MAX_LOCATE_ITER {
             if hi - lo <= tol {
                 break;
@@ -1116,33 +1128,54 @@ impl<T: Real> Twin<T> {
             // stretch of 5e-6 of the step around its stop) puts regula falsi's point on
             // `lo` for good: the margin crept up 0.4 tol per evaluation, the bracket
             // never closed and the event was placed at the step's end, past the lever's
-            // reversal (S2 in f32 chose I0 instead of I8 at t = 0.3073 s). Bisect then.
-            let th = guess
-                .take()
-                .unwrap_or_else(|| (lo * ghi - hi * glo) / (ghi - glo));
+            // reversal (S2 in f32 chose I0 instead of I8 at 0.3073 s). Bisect then.
+            //
+            // Near the crossing, a sharper estimate aims just past it (see `near`):
+            // from the first evaluated point, a Newton step on the interpolant's slope;
+            // from two, their secant.
             let margin = tol * T::c(0.4);
-            let th = if th.finite() && glo != T::zero() {
-                th.max(lo + margin).min(hi - margin)
-            } else {
-                (lo + hi) * T::c(0.5)
+            let aimed = match (guess.take(), last) {
+                (Some(th), _) => Some(th),
+                (None, Some((tp, gp))) => slope.take().map(|s| tp - gp / s + margin),
+                (None, None) => None,
+            };
+            let th = match aimed {
+                Some(th) if th.finite() => th.max(lo + margin).min(hi - margin),
+                _ if glo != T::zero() => {
+                    let rf = (lo * ghi - hi * glo) / (ghi - glo);
+                    if rf.finite() {
+                        rf.max(lo + margin).min(hi - margin)
+                    } else {
+                        (lo + hi) * T::c(0.5)
+                    }
+                }
+                _ => (lo + hi) * T::c(0.5),
             };
             self.dp5.dense(th, &mut y);
             w.t = t0 + th * h;
             w.y = y;
             if speeds_only {
-                self.slot
+                self.slots
+                    .cur_mut()
                     .eval_speeds(w.t, &w.y)
                     .map_err(|e| self.physical_error(e))?;
-                let links = self.slot.links(&self.params);
+                let links = self.slots.cur().links(&self.params);
                 // The clutch torques are those of the last full evaluation: the
                 // torque functions are not read (none of them fired).
-                self.guards = self.guards_of(&self.slot, &links, &self.c, inputs);
+                self.guards = self.guards_of(self.slots.cur(), &links, &self.c, inputs);
             } else {
                 // A point of the bracket, not where the step goes on from: no seed.
                 self.evaluate_at(w, inputs)?;
             }
             let (g, k) = pick(&self.guards);
             at_hi = g > T::zero();
+            // The secant of this point and the last one, if they are `near`: the
+            // crossing to ~near² (the curvature term), far below `tol`.
+            let crossing = last
+                .filter(|(tp, _)| (th - *tp).abs() <= near)
+                .map(|(tp, gp)| th - g * (th - tp) / (g - gp))
+                .filter(|r| r.finite());
+            last = Some((th, g));
             if at_hi {
                 hi = th;
                 ghi = g;
@@ -1151,6 +1184,13 @@ impl<T: Real> Twin<T> {
                     glo *= T::c(0.5);
                 }
                 side = 1;
+                // Past the crossing by at most the tolerance: located, though no
+                // point on the other side is that close (`lo` becomes the secant's
+                // crossing, for the log below).
+                if let Some(r) = crossing.filter(|r| th - *r <= tol && *r >= lo) {
+                    lo = r;
+                    break;
+                }
             } else {
                 lo = th;
                 glo = g;
@@ -1158,6 +1198,10 @@ impl<T: Real> Twin<T> {
                     ghi *= T::c(0.5);
                 }
                 side = -1;
+            }
+            // Next: aim just past the secant's crossing.
+            if let Some(r) = crossing {
+                guess = Some(r + margin);
             }
         }
         log::debug!(
@@ -1177,7 +1221,7 @@ impl<T: Real> Twin<T> {
 
     /// Physical angles of the slot's links, unwrapped against the last committed ones.
     fn slot_links_unwrapped(&self) -> [T; 9] {
-        let links = self.slot.links(&self.params);
+        let links = self.slots.cur().links(&self.params);
         let mut out = [T::zero(); 9];
         for ((o, now), last) in out.iter_mut().zip(&links).zip(&self.links).skip(1) {
             *o = unwrap_near(now.theta, last.theta);
@@ -1195,9 +1239,9 @@ impl<T: Real> Twin<T> {
         inputs: &Inputs<T>,
     ) -> Result<(), TwinError> {
         let time = w.t.to_f64();
-        let from = self.slot.mode;
+        let from = self.slots.cur().mode;
         let pose = self.slot_links_unwrapped();
-        let links = self.slot.links(&self.params);
+        let links = self.slots.cur().links(&self.params);
         let d = self.drive;
         let shaft = shaft_speed(from, &links);
         let scale_w = speed_scale(&links);
@@ -1257,7 +1301,7 @@ impl<T: Real> Twin<T> {
             &pose,
             time,
             &mut self.reference,
-            spare_roles(&mut self.spares, self.backup_at).1,
+            self.slots.spares().1,
         )?;
         let mut yr = SVector::<T, STATE>::zeros();
         for k in 0..2 {
@@ -1374,13 +1418,13 @@ impl<T: Real> Twin<T> {
         } else {
             self.finish(w, inputs)?;
         }
-        let after = self.slot.links(&self.params);
+        let after = self.slots.cur().links(&self.params);
         let position_gap = joint_gap(&self.params, &links, &after);
         log::info!(
             "t = {time:.6} s: {} -> {m} ({}, {} coordinates, impact loss {loss:?} J)",
             from,
             kind.name(),
-            self.slot.coords
+            self.slots.cur().coords
         );
         let _ = self.events.push(Event {
             time: w.t,
@@ -1400,10 +1444,18 @@ impl<T: Real> Twin<T> {
     /// The state vector of the slot just taken (stored by [`Twin::try_candidate`]).
     fn cand_state(&self, w: &Work<T>) -> SVector<T, STATE> {
         let mut y = w.y;
-        let n = self.slot.map.dof.min(2);
+        let n = self.slots.cur().map.dof.min(2);
         for k in 0..2 {
-            y[k] = if k < n { self.slot.ws.q[k] } else { T::zero() };
-            y[QD + k] = if k < n { self.slot.ws.qd[k] } else { T::zero() };
+            y[k] = if k < n {
+                self.slots.cur().ws.q[k]
+            } else {
+                T::zero()
+            };
+            y[QD + k] = if k < n {
+                self.slots.cur().ws.qd[k]
+            } else {
+                T::zero()
+            };
         }
         y
     }
@@ -1496,7 +1548,7 @@ impl<T: Real> Twin<T> {
                     // The candidate slot becomes the scratch, where `take_candidate`
                     // takes the pick from (the other slot, free, becomes the candidate
                     // slot): a flip of roles, no copy.
-                    self.backup_at ^= 1;
+                    self.slots.role.swap(1, 2);
                 }
                 true
             }
@@ -1733,19 +1785,19 @@ impl<T: Real> Twin<T> {
         failed: Option<StepError>,
     ) -> Result<(), TwinError> {
         let time = w.t.to_f64();
-        let mode = self.slot.mode;
+        let mode = self.slots.cur().mode;
         let pose = self.slot_links_unwrapped();
-        let links = self.slot.links(&self.params);
-        let now = self.slot.conditioning();
+        let links = self.slots.cur().links(&self.params);
+        let now = self.slots.cur().conditioning();
         // (conditioning, choice, its coordinates) of the best other choice, which the
         // candidate slot holds.
         let mut best: Option<(T, Coordinates, [T; 2])> = None;
         // The current choice is not assembled again: it is at this very pose with
         // conditioning `now`, so it could only win the scan by keeping its place, and
         // another choice is taken only if it beats `now` by 1.5.
-        let skip = Some(self.slot.coords);
+        let skip = Some(self.slots.cur().coords);
         // The reference slot is the spare: the mode choice builds it again.
-        let (backup, cand) = spare_roles(&mut self.spares, self.backup_at);
+        let (backup, cand) = self.slots.spares();
         let scratch = if w.switched { cand } else { backup };
         let mut failures = scan_choices(
             &self.params,
@@ -1771,12 +1823,12 @@ impl<T: Real> Twin<T> {
         }
         let Some((cond, coords, q)) = best else {
             if let Some(StepError::Group { group, fault, .. }) =
-                failed.map(|e| physical(&self.slot.map, e))
+                failed.map(|e| physical(&self.slots.cur().map, e))
             {
                 let _ = failures.insert(
                     0,
                     Failure {
-                        coords: self.slot.coords,
+                        coords: self.slots.cur().coords,
                         group,
                         fault,
                     },
@@ -1791,13 +1843,13 @@ impl<T: Real> Twin<T> {
         if !(failed.is_some() || cond > now * T::c(1.5)) {
             return Ok(());
         }
-        let from = self.slot.coords;
+        let from = self.slots.cur().coords;
         self.take_candidate(w);
         let omega: [T; 9] = core::array::from_fn(|p| links[p].omega);
-        load_state(&self.slot, &q, &omega, &mut w.y);
+        load_state(self.slots.cur(), &q, &omega, &mut w.y);
         self.dp5.invalidate();
         self.finish(w, inputs)?;
-        let after = self.slot.links(&self.params);
+        let after = self.slots.cur().links(&self.params);
         let position_gap = joint_gap(&self.params, &links, &after);
         let speed_gap = (1..9).fold(T::zero(), |e, p| {
             e.max((after[p].omega - links[p].omega).abs())
@@ -1808,7 +1860,7 @@ impl<T: Real> Twin<T> {
             mode,
             from,
             to: coords,
-            conditioning: [now, self.slot.conditioning()],
+            conditioning: [now, self.slots.cur().conditioning()],
             position_gap,
             speed_gap,
         });
@@ -1822,8 +1874,8 @@ impl<T: Real> Twin<T> {
         for (l, last) in links.iter_mut().zip(self.links.iter()).skip(1) {
             l.theta = unwrap_near(l.theta, last.theta);
         }
-        if self.slot.mode.shaft_turning() {
-            let lever = if self.slot.mode.clutches()[0] == Clutch::Engaged {
+        if self.slots.cur().mode.shaft_turning() {
+            let lever = if self.slots.cur().mode.clutches()[0] == Clutch::Engaged {
                 6
             } else {
                 8
@@ -1831,25 +1883,26 @@ impl<T: Real> Twin<T> {
             self.shaft_angle += links[lever].theta - self.links[lever].theta;
         }
         self.links = links;
-        self.joints = self.slot.joint_reactions(&self.params, &links);
+        self.joints = self.slots.cur().joint_reactions(&self.params, &links);
         self.audit = audit;
     }
 
     fn physical_error(&self, e: StepError) -> TwinError {
         match e {
             StepError::Group { .. } => {
-                let StepError::Group { time, group, fault } = physical(&self.slot.map, e) else {
+                let StepError::Group { time, group, fault } = physical(&self.slots.cur().map, e)
+                else {
                     return TwinError::Step(e);
                 };
                 let mut failures = heapless::Vec::new();
                 let _ = failures.push(Failure {
-                    coords: self.slot.coords,
+                    coords: self.slots.cur().coords,
                     group,
                     fault,
                 });
                 TwinError::Mechanism {
                     time,
-                    mode: self.slot.mode,
+                    mode: self.slots.cur().mode,
                     failures,
                 }
             }
@@ -1877,32 +1930,33 @@ impl<T: Real> Twin<T> {
     }
     /// The current mode.
     pub fn mode(&self) -> Mode {
-        self.slot.mode
+        self.slots.cur().mode
     }
     /// The current independent coordinates.
     pub fn coordinates(&self) -> Coordinates {
-        self.slot.coords
+        self.slots.cur().coords
     }
     /// Values of the current coordinates (`[..dof]`), rad.
     pub fn q(&self) -> &[T] {
         self.y
             .as_slice()
-            .get(..self.slot.map.dof.min(2))
+            .get(..self.slots.cur().map.dof.min(2))
             .unwrap_or(&[])
     }
     /// Their speeds, rad/s.
     pub fn qd(&self) -> &[T] {
         self.y
             .as_slice()
-            .get(QD..QD + self.slot.map.dof.min(2))
+            .get(QD..QD + self.slots.cur().map.dof.min(2))
             .unwrap_or(&[])
     }
     /// Their accelerations, rad/s².
     pub fn qdd(&self) -> &[T] {
-        self.slot
+        self.slots
+            .cur()
             .ws
             .qdd
-            .get(..self.slot.map.dof.min(2))
+            .get(..self.slots.cur().map.dof.min(2))
             .unwrap_or(&[])
     }
     /// Physical state of link `p` (1..=8).
@@ -1922,7 +1976,7 @@ impl<T: Real> Twin<T> {
     }
     /// Shaft speed, rad/s, CCW positive (0 while held).
     pub fn shaft_speed(&self) -> T {
-        shaft_speed(self.slot.mode, &self.links)
+        shaft_speed(self.slots.cur().mode, &self.links)
     }
     /// Shaft angle turned since the start, rad, CCW positive.
     pub fn shaft_angle(&self) -> T {
@@ -1968,11 +2022,11 @@ impl<T: Real> Twin<T> {
     }
     /// Smallest normalized determinant over the current sequence's groups.
     pub fn conditioning(&self) -> T {
-        self.slot.conditioning()
+        self.slots.cur().conditioning()
     }
     /// The current mode's core model.
     pub fn model(&self) -> &crate::model::Model<T> {
-        &self.slot.model
+        &self.slots.cur().model
     }
 }
 
@@ -2133,7 +2187,7 @@ fn rows_mismatch<T: Real>(rows: &[SVector<T, 3>], u: &SVector<T, 3>) -> T {
 /// fraction θ: h·dg/dt), to `tol`/100 ([`bracketed_root`]). No evaluation of the
 /// mechanism: the first point of [`Twin::locate`]'s iteration, O(h⁴) from the true
 /// crossing. `None` if the values do not bracket a root.
-fn hermite_root<T: Real>(g0: T, g1: T, s0: T, s1: T, tol: T) -> Option<T> {
+fn hermite_root<T: Real>(g0: T, g1: T, s0: T, s1: T, tol: T) -> Option<(T, T)> {
     if !(s0.finite() && s1.finite()) {
         return None;
     }
@@ -2163,7 +2217,7 @@ fn hermite_root<T: Real>(g0: T, g1: T, s0: T, s1: T, tol: T) -> Option<T> {
 /// `r` its length over this one's), to `tol`/100; O(h³) from the true crossing. For
 /// the torque functions, whose rates the evaluation does not give. `None` if the
 /// values do not bracket a root.
-fn quadratic_root<T: Real>(gm: T, r: T, g0: T, g1: T, tol: T) -> Option<T> {
+fn quadratic_root<T: Real>(gm: T, r: T, g0: T, g1: T, tol: T) -> Option<(T, T)> {
     // p(θ) = g0 + a θ + b θ², p(1) = g1, p(-r) = gm.
     let b = (gm - g0 + r * (g1 - g0)) / (r * (T::one() + r));
     let a = g1 - g0 - b;
@@ -2182,7 +2236,7 @@ fn quadratic_root<T: Real>(gm: T, r: T, g0: T, g1: T, tol: T) -> Option<T> {
 /// `p(0) = g0 ≤ 0 < p(1) = g1`, to `tol`/100: safeguarded Newton from the linear
 /// root (bisection whenever Newton leaves the bracket; at most 40 iterations, usually
 /// 3). `None` if the values do not bracket a root.
-fn bracketed_root<T: Real>(p: impl Fn(T) -> (T, T), g0: T, g1: T, tol: T) -> Option<T> {
+fn bracketed_root<T: Real>(p: impl Fn(T) -> (T, T), g0: T, g1: T, tol: T) -> Option<(T, T)> {
     if !(g0 <= T::zero() && g1 > T::zero()) {
         return None;
     }
@@ -2207,17 +2261,59 @@ fn bracketed_root<T: Real>(p: impl Fn(T) -> (T, T), g0: T, g1: T, tol: T) -> Opt
             break;
         }
     }
-    th.finite().then_some(th)
+    let (_, slope) = p(th);
+    (th.finite() && slope.finite()).then_some((th, slope))
 }
 
-/// The twin's spare slots as `(backup, candidate)`: `backup_at` says which of the two
-/// is the backup.
-fn spare_roles<T: Real>(spares: &mut [Slot<T>; 2], backup_at: u8) -> (&mut Slot<T>, &mut Slot<T>) {
-    let [a, b] = spares;
-    if backup_at == 0 {
-        (a, b)
-    } else {
-        (b, a)
+/// The twin's three working slots (30 KB each in f64) and their roles: the current
+/// slot, the backup (the pre-step slot once a step changed the current one, see
+/// [`Twin::scratch`]) and the candidate slot. The roles move, never the slots: taking
+/// a candidate, restoring the backup or handing the backup's role to the slot that
+/// holds a pick permutes `role` (a 30 KB swap cost 7.5k instructions per event).
+#[derive(Clone, Debug)]
+struct Slots<T: Real> {
+    s: [Slot<T>; 3],
+    /// Indices into `s` of the current slot, the backup and the candidate slot: a
+    /// permutation of 0, 1, 2 (only ever swapped).
+    role: [u8; 3],
+}
+
+impl<T: Real> Slots<T> {
+    fn at(&self, k: usize) -> &Slot<T> {
+        let [a, b, c] = &self.s;
+        match self.role.get(k) {
+            Some(0) => a,
+            Some(1) => b,
+            _ => c,
+        }
+    }
+
+    /// The current slot: the mode and coordinates the twin integrates.
+    fn cur(&self) -> &Slot<T> {
+        self.at(0)
+    }
+
+    fn cur_mut(&mut self) -> &mut Slot<T> {
+        let [a, b, c] = &mut self.s;
+        match self.role.first() {
+            Some(0) => a,
+            Some(1) => b,
+            _ => c,
+        }
+    }
+
+    /// `(backup, candidate slot)`.
+    fn spares(&mut self) -> (&mut Slot<T>, &mut Slot<T>) {
+        let [a, b, c] = &mut self.s;
+        // The roles are a permutation: the two spares are distinct slots.
+        match (self.role.get(1), self.role.get(2)) {
+            (Some(0), Some(1)) => (a, b),
+            (Some(0), _) => (a, c),
+            (Some(1), Some(0)) => (b, a),
+            (Some(1), _) => (b, c),
+            (_, Some(0)) => (c, a),
+            _ => (c, b),
+        }
     }
 }
 
