@@ -21,7 +21,7 @@ use crate::dynamics::finish_accelerations;
 use crate::error::{GroupFault, GroupId, ModelError, StepError};
 use crate::integrator::Dp5;
 use crate::kinetostatics::reactions;
-use crate::scalar::{Real, Vec2};
+use crate::scalar::{unit, Real, Vec2};
 use core::fmt;
 use nalgebra::{SMatrix, SVector};
 
@@ -2035,19 +2035,16 @@ impl<T: Real> Twin<T> {
 /// Largest distance between the joints (both ends of every link, and D) of two
 /// physical states, m.
 fn joint_gap<T: Real>(params: &CccParams<T>, a: &[LinkState<T>; 9], b: &[LinkState<T>; 9]) -> T {
-    let mut gap = T::zero();
+    let mut gap2 = T::zero();
     for p in 1..9 {
         let len = params.link(p).length;
-        let (ua, ub) = (
-            Vec2::new(a[p].theta.cos(), a[p].theta.sin()),
-            Vec2::new(b[p].theta.cos(), b[p].theta.sin()),
-        );
+        let (ua, ub) = (unit(a[p].theta), unit(b[p].theta));
         for x in [T::zero(), len, params.rocker_d] {
             let gap_at = (a[p].origin + ua * x) - (b[p].origin + ub * x);
-            gap = gap.max(gap_at.norm());
+            gap2 = gap2.max(gap_at.norm_squared());
         }
     }
-    gap
+    gap2.sqrt()
 }
 
 /// Writes a slot's coordinates `q` and their speeds (the angular speeds `omega` of the
