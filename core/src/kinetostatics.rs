@@ -527,7 +527,17 @@ impl<T: Real> Equilibrium<T> {
                 }
             }
         }
-        if !crate::linalg::solve_rows(&mut a, &mut b, m) {
+        // Rows and columns past `m` (a group whose reduced system is smaller than `N`)
+        // as identity: the elimination then runs over the constant size `N`, which the
+        // compiler unrolls and bounds-checks once (half the instructions of a run-time
+        // size); the padding neither pivots (zero in the live columns) nor changes a
+        // live entry (`x - f · 0`).
+        for (r, row) in a.iter_mut().enumerate().skip(m) {
+            if let Some(e) = row.get_mut(r) {
+                *e = T::one();
+            }
+        }
+        if !crate::linalg::solve_rows(&mut a, &mut b, N) {
             return Some(false);
         }
         // The kept inner joints' unknowns, then the rods' eliminated ones.
