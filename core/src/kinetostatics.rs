@@ -190,10 +190,11 @@ impl<T: Real> Equilibrium<T> {
             return true;
         }
         // Reduced sizes: 6 covers the triad (4 links, 3 outer joints), 8 the six-link
-        // group (3 outer joints, 2 rods), 4 both once their one-joint rows are taken
-        // out; a group whose reduced system is larger is solved dense.
+        // group (3 outer joints, 2 rods); 3 and 4 once their one-joint rows are taken
+        // out (each solved at that size: no padding to unroll); a group whose reduced
+        // system is larger is solved dense.
         let reduced = match links {
-            0..=4 => self.reduced::<6, 4>(g),
+            0..=4 => self.reduced::<6, 3>(g),
             _ => self.reduced::<8, 4>(g),
         };
         reduced.unwrap_or_else(|| match links {
