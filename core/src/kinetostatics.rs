@@ -17,7 +17,8 @@
 //! - a group whose links each have at most one outer joint (the triad, the six-link
 //!   Assur group) by block elimination, the dyad's method generalized (see
 //!   `Equilibrium::reduced`): a small sparse system in the inner joints' unknowns
-//!   (6 for the triad, 8 for the six-link group), then back-substitution;
+//!   (6 for the triad, 8 for the six-link group), of which the rows that see one
+//!   joint only are taken out first (leaving 3 and 4), then back-substitution;
 //! - any other group as one dense system.
 
 use crate::config::{MAX_BODIES, MAX_GROUP_JOINTS, MAX_GROUP_LINKS, POSE_ROWS};
@@ -189,11 +190,12 @@ impl<T: Real> Equilibrium<T> {
             return true;
         }
         // Reduced sizes: 6 covers the triad (4 links, 3 outer joints), 8 the six-link
-        // group (3 outer joints, 2 rods); a group whose reduced system is larger is
-        // solved dense.
+        // group (3 outer joints, 2 rods); 3 and 4 once their one-joint rows are taken
+        // out (each solved at that size: no padding to unroll); a group whose reduced
+        // system is larger is solved dense.
         let reduced = match links {
-            0..=4 => self.reduced::<6>(g),
-            _ => self.reduced::<8>(g),
+            0..=4 => self.reduced::<6, 3>(g),
+            _ => self.reduced::<8, 4>(g),
         };
         reduced.unwrap_or_else(|| match links {
             0..=2 => self.dense::<6>(g),
@@ -310,12 +312,18 @@ impl<T: Real> Equilibrium<T> {
     /// equilibrium of `e`'s other link. A link that eliminates nothing keeps its 3
     /// rows. The kept rows (3 × links - 2 × eliminated joints) determine the other
     /// inner joints' unknowns as a small sparse system: 6 for the triad instead of 12,
-    /// 8 for the six-link group instead of 18. Then the rods' joints, then the outer
-    /// joints, `W_o λ_o = -L - Σ (the inner reactions' wrenches)`. `None` if the group
-    /// is not of this shape (the dense system then solves it), `Some(false)` if it is
-    /// singular.
+    /// 8 for the six-link group instead of 18. A link's one kept row that sees one
+    /// inner joint only (the moment about a binary link's outer joint, or about a
+    /// rod's eliminated end) leaves that joint one unknown `μ` (see [`Param`]): 3 of
+    /// the triad's 6 rows, 4 of the six-link group's 8 are of this kind, and the
+    /// system left is 3 × 3 and 4 × 4 (`≤ R`; else none is taken out and the system
+    /// is solved whole, at `N`). Then the rods' joints, then the outer joints,
+    /// `W_o λ_o = -L - Σ (the inner reactions' wrenches)`. `None` if the group is not
+    /// of this shape (the dense system then solves it), `Some(false)` if it is
+    /// singular (a one-joint row of zeros leaves non-finite values instead, which
+    /// [`reactions`] reports alike).
     #[inline(never)]
-    fn reduced<const N: usize>(&mut self, g: &Group<T>) -> Option<bool> {
+    fn reduced<const N: usize, const R: usize>(&mut self, g: &Group<T>) -> Option<bool> {
         let links = g.placements.len();
         let nj = g.joints.len();
         // Per joint: its link `i`'s index, its other body's (`None`: an earlier body),
@@ -392,19 +400,67 @@ impl<T: Real> Equilibrium<T> {
                 *e = Some(ke);
             }
         }
-        // Columns: the kept inner joints' unknowns.
+        // The links whose one kept row sees one kept joint only (of 2 unknowns) and
+        // no rod's substitution: `par[k] = Some(p)` if link `p`'s row parametrizes
+        // joint `k` (see `Param`). Per link: the kept joints it sees (how many, the
+        // last), a rod's substitution counting as more than one.
+        let mut seen = [(0, 0); MAX_GROUP_LINKS];
+        for (k, (r, (i, j))) in rod.iter().zip(&on).enumerate().take(nj) {
+            let Some(j) = j else {
+                continue;
+            };
+            let (links, add) = match r {
+                None => ([*i, *j], 1),
+                Some((p, _)) => ([if i == p { *j } else { *i }, MAX_GROUP_LINKS], 2),
+            };
+            for l in links {
+                if let Some((count, last)) = seen.get_mut(l) {
+                    *count += add;
+                    *last = k;
+                }
+            }
+        }
+        let mut par = [None; MAX_GROUP_JOINTS];
+        let mut single = [false; MAX_GROUP_LINKS];
+        for (p, ((e, s), sn)) in elim
+            .iter()
+            .zip(&mut single)
+            .zip(&seen)
+            .enumerate()
+            .take(links)
+        {
+            if let (Some(_), (1, k)) = (e, sn) {
+                if let (true, Some(slot @ None)) = (two(*k), par.get_mut(*k)) {
+                    *slot = Some(p);
+                    *s = true;
+                }
+            }
+        }
+        // Columns: the kept inner joints' unknowns (one, `μ`, for a parametrized
+        // joint). The parametrization pays when it leaves a system of at most `R`
+        // unknowns; otherwise none is made.
         let mut col = [0; MAX_GROUP_JOINTS];
         let mut m = 0;
-        for ((c, (_, j)), (u, r)) in col
-            .iter_mut()
-            .zip(&on)
-            .zip(self.joints.iter().zip(&rod))
-            .take(nj)
-        {
-            *c = m;
-            if j.is_some() && r.is_none() {
-                m += u.n;
+        for pass in 0..2 {
+            m = 0;
+            for ((c, k), (u, pk)) in col
+                .iter_mut()
+                .zip(0..)
+                .zip(self.joints.iter().zip(&par))
+                .take(nj)
+            {
+                *c = m;
+                if on.get(k).is_some_and(|(_, j)| j.is_some())
+                    && rod.get(k).is_some_and(|r| r.is_none())
+                {
+                    m += if pk.is_some() { 1 } else { u.n };
+                }
             }
+            if m <= R || pass == 1 {
+                break;
+            }
+            par = [None; MAX_GROUP_JOINTS];
+            single = [false; MAX_GROUP_LINKS];
         }
         // Per link: its first kept row and, if it eliminates a joint, that joint's
         // wrench columns on it (as acting on it) and `n`.
@@ -428,10 +484,34 @@ impl<T: Real> Equilibrium<T> {
                 Some((w, w[0].cross(&w[1])))
             });
             *pr = (rows, w);
-            rows += if w.is_some() { 1 } else { 3 };
+            rows += match (w.is_some(), single.get(p)) {
+                (_, Some(true)) => 0,
+                (true, _) => 1,
+                (false, _) => 3,
+            };
         }
         if rows != m || m > N {
             return None;
+        }
+        // The parametrized joints: `λ_k = t + μ d` from their link's row.
+        let mut param = [Param::default(); MAX_GROUP_JOINTS];
+        for (k, (pk, pm)) in par.iter().zip(&mut param).enumerate().take(nj) {
+            let Some(p) = pk else {
+                continue;
+            };
+            let (Some(u), Some((i, _)), Some((_, Some((_, n)))), Some(cog), Some(load)) = (
+                self.joints.get(k),
+                on.get(k),
+                proj.get(*p),
+                self.cog.get(*p),
+                self.load.get(*p),
+            ) else {
+                return None;
+            };
+            // The row `n · (±W_k λ_k) = -n · L_p` (`+` on the joint's link `i`).
+            let sign = if i == p { T::one() } else { -T::one() };
+            let [w0, w1] = u.wrenches(*cog);
+            *pm = Param::of(n.dot(&w0) * sign, n.dot(&w1) * sign, -n.dot(load));
         }
         // A rod's eliminated joint: `λ_e = β + K λ_a` (columns of `K`: per unknown of `a`).
         let mut aff = [(Vector3::zeros(), [Vector3::zeros(); 2]); MAX_GROUP_JOINTS];
@@ -469,24 +549,38 @@ impl<T: Real> Equilibrium<T> {
             Some(n) => ([n.dot(v), T::zero(), T::zero()], 1),
             None => ([v.x, v.y, v.z], 3),
         };
-        for ((r0, w), load) in proj.iter().zip(&self.load).take(links) {
+        for (((r0, w), load), s) in proj.iter().zip(&self.load).zip(&single).take(links) {
+            if *s {
+                continue;
+            }
             let (e, rows) = project(w.as_ref().map(|(_, n)| n), &-*load);
             for (x, e) in b.iter_mut().skip(*r0).take(rows).zip(e) {
                 *x = e;
             }
         }
-        for ((u, (i, j)), (r, (af, c0))) in self
+        // Where kept joint `k`'s unknown `c` goes (see `put`).
+        let target = |k: usize, c: usize| {
+            let c0 = col.get(k).copied().unwrap_or(N);
+            match param.get(k) {
+                Some(pm) if pm.on => (c0, Some(pm.at(c))),
+                _ => (c0 + c, None),
+            }
+        };
+        for (k, ((u, (i, j)), (r, af))) in self
             .joints
             .iter()
             .zip(&on)
-            .zip(rod.iter().zip(aff.iter().zip(&col)))
+            .zip(rod.iter().zip(aff.iter()))
+            .enumerate()
             .take(nj)
         {
             let Some(j) = j else {
                 continue;
             };
             for (link, neg) in [(*i, false), (*j, true)] {
-                let (Some((r0, w)), Some(cog)) = (proj.get(link), self.cog.get(link)) else {
+                let (Some((r0, w)), Some(cog), Some(false)) =
+                    (proj.get(link), self.cog.get(link), single.get(link))
+                else {
                     continue;
                 };
                 let n = w.as_ref().map(|(_, n)| n);
@@ -498,17 +592,12 @@ impl<T: Real> Equilibrium<T> {
                     None => {
                         for (c, v) in wk.iter().take(u.n).enumerate() {
                             let (e, rows) = project(n, v);
-                            for (row, e) in a.iter_mut().skip(*r0).take(rows).zip(e) {
-                                if let Some(x) = row.get_mut(c0 + c) {
-                                    *x += e;
-                                }
-                            }
+                            put(&mut a, &mut b, (*r0, rows), e, target(k, c));
                         }
                     }
                     Some((p, _)) if *p == link => {}
                     Some((_, ka)) => {
                         let (beta, kk) = af;
-                        let ca = col.get(*ka).copied().unwrap_or(N);
                         let rhs = wk[0] * beta.x + wk[1] * beta.y;
                         let (e, rows) = project(n, &rhs);
                         for (x, e) in b.iter_mut().skip(*r0).take(rows).zip(e) {
@@ -517,28 +606,63 @@ impl<T: Real> Equilibrium<T> {
                         for (c, kc) in kk.iter().enumerate() {
                             let v = wk[0] * kc.x + wk[1] * kc.y;
                             let (e, rows) = project(n, &v);
-                            for (row, e) in a.iter_mut().skip(*r0).take(rows).zip(e) {
-                                if let Some(x) = row.get_mut(ca + c) {
-                                    *x += e;
-                                }
-                            }
+                            put(&mut a, &mut b, (*r0, rows), e, target(*ka, c));
                         }
                     }
                 }
             }
         }
-        if !crate::linalg::solve_rows(&mut a, &mut b, m) {
-            return Some(false);
+        // Solved at a constant size (`R` if it fits, else `N`), rows and columns past
+        // `m` as identity: the elimination then unrolls and bounds-checks once (half
+        // the instructions of a run-time size); the padding neither pivots (zero in the
+        // live columns) nor changes a live entry (`x - f · 0`).
+        if m <= R {
+            let mut sa = [[T::zero(); R]; R];
+            let mut sb = [T::zero(); R];
+            for (((r, srow), sx), (row, x)) in
+                sa.iter_mut().enumerate().zip(&mut sb).zip(a.iter().zip(&b))
+            {
+                for (y, v) in srow.iter_mut().zip(row) {
+                    *y = *v;
+                }
+                *sx = *x;
+                if let (true, Some(e)) = (r >= m, srow.get_mut(r)) {
+                    *e = T::one();
+                }
+            }
+            if !crate::linalg::solve_rows(&mut sa, &mut sb, R) {
+                return Some(false);
+            }
+            for (x, v) in b.iter_mut().zip(sb) {
+                *x = v;
+            }
+        } else {
+            for (r, row) in a.iter_mut().enumerate().skip(m) {
+                if let Some(e) = row.get_mut(r) {
+                    *e = T::one();
+                }
+            }
+            if !crate::linalg::solve_rows(&mut a, &mut b, N) {
+                return Some(false);
+            }
         }
         // The kept inner joints' unknowns, then the rods' eliminated ones.
-        for ((u, ((_, j), r)), (f0, c0)) in self
+        for ((u, ((_, j), r)), ((f0, c0), pm)) in self
             .joints
             .iter()
             .zip(on.iter().zip(&rod))
-            .zip(first.iter().zip(&col))
+            .zip(first.iter().zip(&col).zip(&param))
             .take(nj)
         {
             if j.is_none() || r.is_some() {
+                continue;
+            }
+            if pm.on {
+                let mu = b.get(*c0).copied().unwrap_or(T::zero());
+                for (o, c) in self.lam.iter_mut().skip(*f0).zip(0..2) {
+                    let (t, d) = pm.at(c);
+                    *o = t + mu * d;
+                }
                 continue;
             }
             for (o, v) in self
@@ -555,8 +679,8 @@ impl<T: Real> Equilibrium<T> {
             let Some((_, ka)) = r else {
                 continue;
             };
-            let ca = col.get(*ka).copied().unwrap_or(N);
-            let (Some(x0), Some(x1)) = (b.get(ca), b.get(ca + 1)) else {
+            let fa = first.get(*ka).copied().unwrap_or(GROUP_ROWS);
+            let (Some(x0), Some(x1)) = (self.lam.get(fa), self.lam.get(fa + 1)) else {
                 return None;
             };
             let l = *beta + kk[0] * *x0 + kk[1] * *x1;
@@ -645,6 +769,69 @@ impl<T: Real> Equilibrium<T> {
             *o = *v;
         }
         true
+    }
+}
+
+/// A kept joint of 2 unknowns whose link's one kept row `a_0 λ_0 + a_1 λ_1 = β` sees
+/// no other unknown: that row leaves it one degree of freedom, `λ = t + μ d` with
+/// `t = β a / |a|²` (the row's solution nearest zero) and `d = a^⊥ = (-a_1, a_0)`, so
+/// that it takes one column (`μ`) and its row none in the reduced system.
+#[derive(Clone, Copy)]
+struct Param<T: Real> {
+    /// Whether the joint is parametrized.
+    on: bool,
+    /// Per unknown, `(t_c, d_c)`.
+    td: [(T, T); 2],
+}
+
+impl<T: Real> Default for Param<T> {
+    fn default() -> Self {
+        Self {
+            on: false,
+            td: [(T::zero(), T::zero()); 2],
+        }
+    }
+}
+
+impl<T: Real> Param<T> {
+    /// From the row `a_0 λ_0 + a_1 λ_1 = β`.
+    fn of(a0: T, a1: T, beta: T) -> Self {
+        let s = a0 * a0 + a1 * a1;
+        Self {
+            on: true,
+            td: [(a0 * beta / s, -a1), (a1 * beta / s, a0)],
+        }
+    }
+
+    /// `(t_c, d_c)` of unknown `c` (0 or 1).
+    fn at(&self, c: usize) -> (T, T) {
+        self.td.get(c).copied().unwrap_or((T::zero(), T::zero()))
+    }
+}
+
+/// A kept joint's unknown with entries `e` in the rows `r0..r0 + rows` of the reduced
+/// system: into its column `cc`, or, parametrized (`f = (t_c, d_c)`), `d_c` times
+/// them into its `μ` column `cc` and `t_c` times them out of the right-hand side.
+#[inline(always)]
+fn put<T: Real, const N: usize>(
+    a: &mut [[T; N]; N],
+    b: &mut [T; N],
+    (r0, rows): (usize, usize),
+    e: [T; 3],
+    (cc, f): (usize, Option<(T, T)>),
+) {
+    for (r, e) in (r0..r0 + rows).zip(e) {
+        let (Some(y), Some(x)) = (a.get_mut(r).and_then(|row| row.get_mut(cc)), b.get_mut(r))
+        else {
+            continue;
+        };
+        match f {
+            Some((t, d)) => {
+                *y += e * d;
+                *x -= e * t;
+            }
+            None => *y += e,
+        }
     }
 }
 

@@ -88,18 +88,18 @@ const PINS: &[Pin<'static>] = &[
     Pin {
         args: "ccc-s2",
         exit: 0,
-        csv: "acfe97d434ad34a4d9c51f5c63ed1be7550053d29c75e120a5edce553f514737",
+        csv: "7ee0cf7c0f49eb5821ac24e396ad2b5733221d216073bc8910cb1d31fb08cea2",
         logs: Some((
-            "04b9e5cc80fd8eface79253afa3c57ed6724165444535588ca053c368996dae8",
+            "aeced822e19adb2524cb323e81cfd3dba80a5a238e747e0c7c4982018a78c2ef",
             "4094b4d965635a6730dbfa8aca3851e218aeedb360a03e3450d85373f01f4dcd",
         )),
     },
     Pin {
         args: "ccc-s2 --ccw",
         exit: 0,
-        csv: "917014f3596465f2b07af49ae91327ca14ea2552d96fb6a2244c581f18c51fc2",
+        csv: "5f7973638b2e916a3922c553b9b18916fd578d287c3df679f32488b8694fe353",
         logs: Some((
-            "1d042917154c4a10f11922ae5a9843390e4a3804df66ba833ccc1d5d84808a2d",
+            "71b7b51fbda8281ed023da2c60cb79834053ee243f428c8bb76e9741086ebdbb",
             "b23ff2cec9e3a6950388edcae36b13d456bc997ac174a7f3bbb7aab62e0bd1d5",
         )),
     },
@@ -121,9 +121,9 @@ const PINS: &[Pin<'static>] = &[
     Pin {
         args: "ccc-s2 --f32",
         exit: 0,
-        csv: "67a04b1e7c035c99f3ea03b20cfdd50da241e1dcad0d11620f51b3b04bf2c56d",
+        csv: "fc8a41291ee890170f0accd30168294a6754e8b85af384f7eab5768bdc090976",
         logs: Some((
-            "c532a25a55bbc33bac968644972eb9192fe0c7af46ee49531600131bd3b0e80d",
+            "7fa4977db3caf907d257a5a6922ef47cce7cd081d5e4bf01beb029e3417c7fdc",
             "8d59d24a92d70cb96f6ed53b67bba3520b68a44e8e160a9b308139bdaec8d667",
         )),
     },
