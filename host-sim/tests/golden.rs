@@ -88,19 +88,19 @@ const PINS: &[Pin<'static>] = &[
     Pin {
         args: "ccc-s2",
         exit: 0,
-        csv: "acfe97d434ad34a4d9c51f5c63ed1be7550053d29c75e120a5edce553f514737",
+        csv: "e26310b8537ac8fb31dd50527f02fc4b42092710e7242d1de71443f7d1a1dd04",
         logs: Some((
-            "04b9e5cc80fd8eface79253afa3c57ed6724165444535588ca053c368996dae8",
-            "4094b4d965635a6730dbfa8aca3851e218aeedb360a03e3450d85373f01f4dcd",
+            "d7993653646b601e9105436c268ce71c7d82d1bb59ddf79d6e04a4f143ab5a2c",
+            "ea0964e6241ba6faacec34937b52c42906a47ee9385c178d8d9d8681a60091c8",
         )),
     },
     Pin {
         args: "ccc-s2 --ccw",
         exit: 0,
-        csv: "917014f3596465f2b07af49ae91327ca14ea2552d96fb6a2244c581f18c51fc2",
+        csv: "cd9355dff10cecd94e84dd39513f937a9b30a5ca1c3c1e0dbe8409328c29518e",
         logs: Some((
-            "1d042917154c4a10f11922ae5a9843390e4a3804df66ba833ccc1d5d84808a2d",
-            "b23ff2cec9e3a6950388edcae36b13d456bc997ac174a7f3bbb7aab62e0bd1d5",
+            "88ee27b4bd1ec02dcaef7beec9bb7e0d7e5086917d32076b188d793200b5d786",
+            "7b899406364e9f8d01c3e6263681bc40b52e70f34c5cfcec78a4379f4ae6e0cf",
         )),
     },
     Pin {
@@ -121,10 +121,10 @@ const PINS: &[Pin<'static>] = &[
     Pin {
         args: "ccc-s2 --f32",
         exit: 0,
-        csv: "67a04b1e7c035c99f3ea03b20cfdd50da241e1dcad0d11620f51b3b04bf2c56d",
+        csv: "8a712d4e01cd183a0a32e10f9e71e85c974041e83c63642d0ea669b586c51484",
         logs: Some((
-            "c532a25a55bbc33bac968644972eb9192fe0c7af46ee49531600131bd3b0e80d",
-            "8d59d24a92d70cb96f6ed53b67bba3520b68a44e8e160a9b308139bdaec8d667",
+            "12a1081a0f3565e0aa4d203aa73f102427b367ce093521b83d135e254a7a288f",
+            "6a41927ea9e64a092f604483b76984cd2938e8e158d6c86ff515e6b6c2537311",
         )),
     },
 ];
