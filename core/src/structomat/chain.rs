@@ -420,6 +420,7 @@ fn set2<T: Real>(f: &mut GroupVector<T>, ci: usize, r: Vec2<T>) {
 /// The Jacobian `W = ∂f/∂x` from the cached terms, as `N × N` rows: the top-left
 /// `n × n` block, identity padding past it (`N = 2` for a dyad, 4 for the triad,
 /// [`MAX_GROUP_VARS`] for the larger groups).
+#[inline]
 pub(crate) fn jacobian<T: Real, const N: usize>(g: &Group<T>, gd: &GroupData<T>) -> [[T; N]; N] {
     let n = g.n_vars as usize;
     let mut w = [[T::zero(); N]; N];

@@ -10,7 +10,7 @@
 //! evaluation, whose error is third order in `q - q₀`.
 
 use super::chain::{chain_gaps, eval_terms, jacobian, position_from_terms, residual};
-use super::{Base, Group, GroupData, Term};
+use super::{Base, Group, GroupData, GroupKind, Term};
 use crate::config::{MAX_DOF, MAX_GROUP_VARS, NEWTON_MAX_ITER};
 use crate::error::GroupFault;
 use crate::model::Model;
@@ -19,6 +19,11 @@ use crate::workspace::BodyState;
 
 /// Bit k set when unknown k is an angle (it turns a term), else a slide length.
 fn angle_mask<T: Real>(g: &Group<T>) -> u8 {
+    // The triad's and a general Assur group's unknowns are all link angles (their
+    // builders make arms only, unknown k turning its link's): no scan of the terms.
+    if matches!(g.kind, GroupKind::Triad | GroupKind::Assur) {
+        return u8::try_from((1u16 << g.n_vars.min(8)) - 1).unwrap_or(u8::MAX);
+    }
     let mut m = 0u8;
     for t in g.chains.iter().flat_map(|c| c.terms.iter()) {
         let (Term::Arm { angle, .. } | Term::Slide { angle, .. }) = t;
