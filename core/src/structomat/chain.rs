@@ -55,7 +55,8 @@ pub struct GroupData<T: Real> {
     /// `L` below the diagonal, `U` on and above it), `P` in `w_piv`. The linear passes
     /// solve with it; factoring costs `n³/3`, an inverse `n³`.
     pub w_fact: [[T; MAX_GROUP_VARS]; MAX_GROUP_VARS],
-    /// The row swaps of the LU factors in `w_fact`, 4 bits a step ([`pack_pivots`]);
+    /// The row swaps of the LU factors in `w_fact`, 4 bits a step (the row
+    /// swapped with row `k` at step `k` in bits `4k..4k + 4`);
     /// unused for a dyad. (Packed: 4 bytes where an array would take 8, in each of the
     /// workspace's groups.)
     pub w_piv: u32,
@@ -69,11 +70,13 @@ pub struct GroupData<T: Real> {
     /// `∂x/∂q` (the thesis's transmission functions C of this group), column j from
     /// the velocity pass with `q̇ = e_j`.
     pub dx_dq: SMatrix<T, MAX_GROUP_VARS, MAX_DOF>,
-    /// `ẍ` with `q̈ = 0`: the bias part of the group's accelerations.
+    /// `ẍ` with `q̈ = 0`: the bias part of the group's accelerations, `∂²x/∂q² [q̇, q̇]`
+    /// at the rates of the last full evaluation (Newton's predictor reads it so).
     pub xdd_bias: [T; MAX_GROUP_VARS],
     /// The coordinates and unknowns at which `dx_dq` was last recorded: Newton-Raphson
-    /// starts from the first-order prediction `x + C (q - q_C)` when its warm start is
-    /// still that `x` ([`newton`](super::newton)). Recorded for the groups Newton
+    /// starts from the prediction `x + C (q - q_C)` plus its second-order term along the
+    /// rates (from `xdd_bias`) when its warm start is still that `x`
+    /// ([`newton`](super::newton)). Recorded for the groups Newton
     /// solves only ([`GroupKind::solved_by_newton`]): the others never read it.
     pub dx_dq_at: ([T; MAX_DOF], [T; MAX_GROUP_VARS]),
 }
@@ -108,7 +111,7 @@ const _: () = assert!(
 
 /// Packs LU row swaps ([`linalg::lu`](crate::linalg::lu)'s `piv`) 4 bits a step: the
 /// row swapped with row `k` at step `k` in bits `4k..4k + 4`.
-pub fn pack_pivots<const N: usize>(piv: &[u8; N]) -> u32 {
+pub(crate) fn pack_pivots<const N: usize>(piv: &[u8; N]) -> u32 {
     piv.iter().enumerate().fold(0, |acc, (k, p)| {
         acc | (u32::from(*p) & 15).checked_shl(4 * k as u32).unwrap_or(0)
     })
