@@ -39,17 +39,20 @@ fn fail<T: Real>(g: &Group<T>, index: usize, time: f64, fault: GroupFault) -> St
     }
 }
 
-/// Solves one group's position problem at the current branch or warm start.
+/// Solves one group's position problem at the current branch or warm start; `qd` are
+/// the rates of the evaluation that recorded the group's transmission functions (the
+/// workspace's, for Newton's predictor).
 fn solve_group<T: Real>(
     g: &Group<T>,
     gd: &mut GroupData<T>,
     model: &Model<T>,
     bodies: &mut [BodyState<T>],
     q: &[T],
+    qd: &[T],
 ) -> Result<T, GroupFault> {
     match g.kind {
         // Linear loop closures (TRT, RTT): one Newton step from anywhere is exact.
-        k if k.solved_by_newton() => return newton::solve(g, gd, model, bodies, q),
+        k if k.solved_by_newton() => return newton::solve(g, gd, model, bodies, q, qd),
         // The RRR dyad factors W and places its links itself (closed forms).
         GroupKind::Rrr => return dyad_rrr::solve(g, gd, model, bodies, model.singular_tol()),
         GroupKind::MotorR => return motor_r::position(g, gd, model, bodies, q),
@@ -74,8 +77,15 @@ pub fn position<T: Real>(
 }
 
 /// A group's position solver: closed form where there is one, or Newton-Raphson.
-type Solver<T> =
-    fn(&Group<T>, &mut GroupData<T>, &Model<T>, &mut [BodyState<T>], &[T]) -> Result<T, GroupFault>;
+/// Its last argument is `q̇` of the last evaluation ([`newton`]'s predictor).
+type Solver<T> = fn(
+    &Group<T>,
+    &mut GroupData<T>,
+    &Model<T>,
+    &mut [BodyState<T>],
+    &[T],
+    &[T],
+) -> Result<T, GroupFault>;
 
 /// The position pass with a given group solver.
 fn position_by<T: Real>(
@@ -94,9 +104,13 @@ fn position_by<T: Real>(
     for (k, v) in ws.q.iter_mut().enumerate() {
         *v = q.get(k).copied().unwrap_or(T::zero());
     }
-    let Workspace { body, group, .. } = ws;
+    // `ws.qd` still holds the rates of the last evaluation (of its velocity pass, which
+    // sets them after this pass): those at which the groups' C and ẍ bias were recorded.
+    let Workspace {
+        body, group, qd, ..
+    } = ws;
     for (i, (g, gd)) in model.groups().iter().zip(group.iter_mut()).enumerate() {
-        let det = solve(g, gd, model, body, q).map_err(|f| fail(g, i, time, f))?;
+        let det = solve(g, gd, model, body, q, qd).map_err(|f| fail(g, i, time, f))?;
         if !g.has_closed_form() && det * gd.det_sign < T::zero() {
             return Err(fail(g, i, time, GroupFault::BranchJump));
         }
@@ -190,7 +204,7 @@ pub fn assemble<T: Real>(
                     if let Some((_, _, placed)) = best.as_mut() {
                         *placed = false;
                     }
-                    match solve_group(g, &mut trial, model, body, q) {
+                    match solve_group(g, &mut trial, model, body, q, &[]) {
                         Ok(_) => {
                             let d = distance_to_guess(g, &trial.x);
                             if best.as_ref().is_none_or(|(bd, _, _)| d < *bd) {
@@ -208,11 +222,12 @@ pub fn assemble<T: Real>(
                 // after it (a closed form's solve is a function of its inputs: placing
                 // again would give the same bits).
                 if !placed {
-                    solve_group(g, gd, model, body, q).map_err(|f| fail(g, i, 0.0, f))?;
+                    solve_group(g, gd, model, body, q, &[]).map_err(|f| fail(g, i, 0.0, f))?;
                 }
             }
             _ => {
-                let det = solve_group(g, gd, model, body, q).map_err(|f| fail(g, i, 0.0, f))?;
+                let det =
+                    solve_group(g, gd, model, body, q, &[]).map_err(|f| fail(g, i, 0.0, f))?;
                 gd.det_sign = if det < T::zero() { -T::one() } else { T::one() };
             }
         }

@@ -86,74 +86,110 @@ pub fn solve<T: Real, const N: usize>(
     Some(SVector::from(x))
 }
 
-/// Inverts the top-left `n × n` block of `a` by Gauss-Jordan elimination with partial
-/// pivoting; the rest of the result is the identity. Returns the inverse and the
-/// block's determinant, or `None` if a pivot vanishes or is not finite. Bounded work:
-/// `n³` multiply-adds, no iteration (a group's Jacobian `W`, `n` ≤ 6).
-pub fn invert<T: Real, const N: usize>(
-    a: SMatrix<T, N, N>,
-    n: usize,
-) -> Option<(SMatrix<T, N, N>, T)> {
-    let n = n.min(N);
-    let mut m = rows(&a);
-    let mut inv = [[T::zero(); N]; N];
-    for (k, row) in inv.iter_mut().enumerate() {
-        if let Some(e) = row.get_mut(k) {
-            *e = T::one();
-        }
-    }
-    let mut det = T::one();
-    for k in 0..n {
-        let p = pivot(&m, k, n)?;
-        if p != k {
-            swap(&mut m, k, p);
-            swap(&mut inv, k, p);
-            det = -det;
-        }
-        let (mk, ik) = (m.get_mut(k)?, inv.get_mut(k)?);
-        let piv = *mk.get(k)?;
-        det *= piv;
-        let ip = T::one() / piv;
-        for (e, i) in mk.get_mut(..n)?.iter_mut().zip(ik.get_mut(..n)?) {
-            *e *= ip;
-            *i *= ip;
-        }
-        let (mk, ik) = (*mk, *ik);
-        let (mk, ik) = (mk.get(..n)?, ik.get(..n)?);
-        for (r, (row, irow)) in m
-            .get_mut(..n)?
-            .iter_mut()
-            .zip(inv.get_mut(..n)?)
-            .enumerate()
-        {
-            if r == k {
-                continue;
-            }
-            let f = *row.get(k)?;
-            if f == T::zero() {
-                continue;
-            }
-            for (e, pe) in row.get_mut(..n)?.iter_mut().zip(mk) {
-                *e -= f * *pe;
-            }
-            for (i, pi) in irow.get_mut(..n)?.iter_mut().zip(ik) {
-                *i -= f * *pi;
-            }
-        }
-    }
-    if !det.finite() {
-        return None;
-    }
-    let at = |r: usize, c: usize| inv.get(r).and_then(|row| row.get(c)).copied();
-    Some((SMatrix::from_fn(|r, c| at(r, c).unwrap_or(T::zero())), det))
-}
-
 /// Swaps entries `k < p` of `s` (rows of a row-major matrix, or of a vector); nothing
 /// if either is out of range (no panic path: slice `swap` asserts its indices).
 fn swap_entries<X>(s: &mut [X], k: usize, p: usize) {
     if let Some((lo, hi)) = s.split_at_mut_checked(p) {
         if let (Some(x), Some(y)) = (lo.get_mut(k), hi.first_mut()) {
             core::mem::swap(x, y);
+        }
+    }
+}
+
+/// LU factorisation with partial pivoting (Doolittle) of `a` (row-major), in place:
+/// `P A = L U`, with `L` strictly below the diagonal (its unit diagonal implied) and
+/// `U` on and above it, the rows in pivot order; `piv[k]` is the row swapped with row
+/// `k` at step `k` (`k` itself for none). Rows whose entry in the pivot column is zero
+/// are left alone (a group's sparse Jacobian costs little more than its fill-in).
+/// Returns the determinant, or `None` if a pivot vanishes or is not finite (`a` and
+/// `piv` are then partly overwritten). Bounded work: `N³/3` multiply-adds at most, no
+/// iteration; the size is a constant, so the loops unroll (a group's `W`, `N` ≤ 6).
+/// With [`lu_solve`] (`N²` per right-hand side, as a product by the inverse) it
+/// replaces an inverse (`N³`) where a matrix serves a few solves.
+pub fn lu<T: Real, const N: usize>(a: &mut [[T; N]; N], piv: &mut [u8; N]) -> Option<T> {
+    let mut det = T::one();
+    for k in 0..N {
+        let mut p = k;
+        let mut best = T::zero();
+        for r in k..N {
+            let v = a.get(r)?.get(k)?.abs();
+            if v > best {
+                best = v;
+                p = r;
+            }
+        }
+        if !(best > T::zero() && best.finite()) {
+            return None;
+        }
+        if p != k {
+            swap(a, k, p);
+            det = -det;
+        }
+        *piv.get_mut(k)? = p as u8;
+        let prow = *a.get(k)?;
+        let d = *prow.get(k)?;
+        det *= d;
+        for r in k + 1..N {
+            let row = a.get_mut(r)?;
+            let rk = *row.get(k)?;
+            if rk == T::zero() {
+                continue;
+            }
+            let f = rk / d;
+            *row.get_mut(k)? = f;
+            for c in k + 1..N {
+                *row.get_mut(c)? -= f * *prow.get(c)?;
+            }
+        }
+    }
+    det.finite().then_some(det)
+}
+
+/// Solves `A x = b`, `x` into `b`, from the factors [`lu`] made of the top-left
+/// `N × N` block `A` of `lu` (`piv` its row swaps; `M ≥ N` is the storage's size):
+/// `b` permuted by `P`, then `L y = P b` forward and `U x = y` backward. Entries of
+/// `b` past `N` are left as they are.
+pub fn lu_solve<T: Real, const N: usize, const M: usize>(
+    lu: &[[T; M]; M],
+    piv: &[u8; M],
+    b: &mut [T; M],
+) {
+    for k in 0..N {
+        let p = piv.get(k).map_or(k, |p| *p as usize);
+        if p > k && p < N {
+            swap(b, k, p);
+        }
+    }
+    lu_substitute::<T, N, M>(lu, b);
+}
+
+/// The substitutions of [`lu_solve`] on a right-hand side already permuted by `P`:
+/// `L y = b` forward, then `U x = y` backward, `x` into `b`.
+pub fn lu_substitute<T: Real, const N: usize, const M: usize>(lu: &[[T; M]; M], b: &mut [T; M]) {
+    for r in 1..N {
+        let (Some(row), Some(mut s)) = (lu.get(r), b.get(r).copied()) else {
+            return;
+        };
+        for c in 0..r {
+            if let (Some(l), Some(y)) = (row.get(c), b.get(c)) {
+                s -= *l * *y;
+            }
+        }
+        if let Some(e) = b.get_mut(r) {
+            *e = s;
+        }
+    }
+    for r in (0..N).rev() {
+        let (Some(row), Some(mut s)) = (lu.get(r), b.get(r).copied()) else {
+            return;
+        };
+        for c in r + 1..N {
+            if let (Some(u), Some(x)) = (row.get(c), b.get(c)) {
+                s -= *u * *x;
+            }
+        }
+        if let (Some(e), Some(d)) = (b.get_mut(r), row.get(r)) {
+            *e = s / *d;
         }
     }
 }

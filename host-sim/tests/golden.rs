@@ -88,19 +88,19 @@ const PINS: &[Pin<'static>] = &[
     Pin {
         args: "ccc-s2",
         exit: 0,
-        csv: "7ee0cf7c0f49eb5821ac24e396ad2b5733221d216073bc8910cb1d31fb08cea2",
+        csv: "e26310b8537ac8fb31dd50527f02fc4b42092710e7242d1de71443f7d1a1dd04",
         logs: Some((
-            "aeced822e19adb2524cb323e81cfd3dba80a5a238e747e0c7c4982018a78c2ef",
-            "4094b4d965635a6730dbfa8aca3851e218aeedb360a03e3450d85373f01f4dcd",
+            "d7993653646b601e9105436c268ce71c7d82d1bb59ddf79d6e04a4f143ab5a2c",
+            "ea0964e6241ba6faacec34937b52c42906a47ee9385c178d8d9d8681a60091c8",
         )),
     },
     Pin {
         args: "ccc-s2 --ccw",
         exit: 0,
-        csv: "5f7973638b2e916a3922c553b9b18916fd578d287c3df679f32488b8694fe353",
+        csv: "cd9355dff10cecd94e84dd39513f937a9b30a5ca1c3c1e0dbe8409328c29518e",
         logs: Some((
-            "71b7b51fbda8281ed023da2c60cb79834053ee243f428c8bb76e9741086ebdbb",
-            "b23ff2cec9e3a6950388edcae36b13d456bc997ac174a7f3bbb7aab62e0bd1d5",
+            "88ee27b4bd1ec02dcaef7beec9bb7e0d7e5086917d32076b188d793200b5d786",
+            "7b899406364e9f8d01c3e6263681bc40b52e70f34c5cfcec78a4379f4ae6e0cf",
         )),
     },
     Pin {
@@ -121,10 +121,10 @@ const PINS: &[Pin<'static>] = &[
     Pin {
         args: "ccc-s2 --f32",
         exit: 0,
-        csv: "fc8a41291ee890170f0accd30168294a6754e8b85af384f7eab5768bdc090976",
+        csv: "8a712d4e01cd183a0a32e10f9e71e85c974041e83c63642d0ea669b586c51484",
         logs: Some((
-            "7fa4977db3caf907d257a5a6922ef47cce7cd081d5e4bf01beb029e3417c7fdc",
-            "8d59d24a92d70cb96f6ed53b67bba3520b68a44e8e160a9b308139bdaec8d667",
+            "12a1081a0f3565e0aa4d203aa73f102427b367ce093521b83d135e254a7a288f",
+            "6a41927ea9e64a092f604483b76984cd2938e8e158d6c86ff515e6b6c2537311",
         )),
     },
 ];

@@ -17,8 +17,6 @@ use crate::scalar::{perp, rotate_cs, Real, Vec2};
 use crate::workspace::BodyState;
 use nalgebra::{SMatrix, SVector};
 
-/// A group's Jacobian `W` (top-left `n × n`, identity padding) and its inverse.
-pub type GroupMatrix<T> = SMatrix<T, MAX_GROUP_VARS, MAX_GROUP_VARS>;
 /// The group's stacked loop-closure residuals (2 rows per closing chain).
 pub type GroupVector<T> = SVector<T, MAX_GROUP_VARS>;
 
@@ -52,8 +50,16 @@ pub struct GroupData<T: Real> {
     pub branch: T,
     /// Sign of det W at assembly (the branch of a Newton group).
     pub det_sign: T,
-    /// `W⁻¹` (top-left `n × n` block).
-    pub w_inv: GroupMatrix<T>,
+    /// `W` factored (top-left `n × n` block, rows): a dyad's (`n = 2`) inverse `W⁻¹`;
+    /// for a larger group the LU factors of `P W` ([`linalg::lu`](crate::linalg::lu):
+    /// `L` below the diagonal, `U` on and above it), `P` in `w_piv`. The linear passes
+    /// solve with it; factoring costs `n³/3`, an inverse `n³`.
+    pub w_fact: [[T; MAX_GROUP_VARS]; MAX_GROUP_VARS],
+    /// The row swaps of the LU factors in `w_fact`, 4 bits a step (the row
+    /// swapped with row `k` at step `k` in bits `4k..4k + 4`);
+    /// unused for a dyad. (Packed: 4 bytes where an array would take 8, in each of the
+    /// workspace's groups.)
+    pub w_piv: u32,
     /// |det W| / product of column norms at the last position solve: the sine of the
     /// transmission angle for a dyad; 0 at a dead point.
     pub conditioning: T,
@@ -64,11 +70,13 @@ pub struct GroupData<T: Real> {
     /// `∂x/∂q` (the thesis's transmission functions C of this group), column j from
     /// the velocity pass with `q̇ = e_j`.
     pub dx_dq: SMatrix<T, MAX_GROUP_VARS, MAX_DOF>,
-    /// `ẍ` with `q̈ = 0`: the bias part of the group's accelerations.
+    /// `ẍ` with `q̈ = 0`: the bias part of the group's accelerations, `∂²x/∂q² [q̇, q̇]`
+    /// at the rates of the last full evaluation (Newton's predictor reads it so).
     pub xdd_bias: [T; MAX_GROUP_VARS],
     /// The coordinates and unknowns at which `dx_dq` was last recorded: Newton-Raphson
-    /// starts from the first-order prediction `x + C (q - q_C)` when its warm start is
-    /// still that `x` ([`newton`](super::newton)). Recorded for the groups Newton
+    /// starts from the prediction `x + C (q - q_C)` plus its second-order term along the
+    /// rates (from `xdd_bias`) when its warm start is still that `x`
+    /// ([`newton`](super::newton)). Recorded for the groups Newton
     /// solves only ([`GroupKind::solved_by_newton`]): the others never read it.
     pub dx_dq_at: ([T; MAX_DOF], [T; MAX_GROUP_VARS]),
 }
@@ -82,13 +90,42 @@ impl<T: Real> Default for GroupData<T> {
             trig: [Vec2::new(T::one(), T::zero()); MAX_GROUP_VARS],
             branch: T::one(),
             det_sign: T::zero(),
-            w_inv: GroupMatrix::identity(),
+            w_fact: core::array::from_fn(|r| {
+                core::array::from_fn(|c| if r == c { T::one() } else { T::zero() })
+            }),
+            w_piv: pack_pivots(&core::array::from_fn::<u8, MAX_GROUP_VARS, _>(|k| k as u8)),
             conditioning: T::one(),
             iterations: 0,
             cache: [[TermCache::default(); MAX_TERMS]; MAX_CHAINS],
             dx_dq: SMatrix::zeros(),
             xdd_bias: [T::zero(); MAX_GROUP_VARS],
             dx_dq_at: ([T::zero(); MAX_DOF], [T::zero(); MAX_GROUP_VARS]),
+        }
+    }
+}
+
+const _: () = assert!(
+    MAX_GROUP_VARS <= 8,
+    "a group's LU pivots are packed 4 bits each in a u32"
+);
+
+/// Packs LU row swaps ([`linalg::lu`](crate::linalg::lu)'s `piv`) 4 bits a step: the
+/// row swapped with row `k` at step `k` in bits `4k..4k + 4`.
+pub(crate) fn pack_pivots<const N: usize>(piv: &[u8; N]) -> u32 {
+    piv.iter().enumerate().fold(0, |acc, (k, p)| {
+        acc | (u32::from(*p) & 15).checked_shl(4 * k as u32).unwrap_or(0)
+    })
+}
+
+/// Applies the row swaps [`pack_pivots`] packed to `b` (the first `n` steps).
+#[inline]
+fn permute<T: Real>(packed: u32, b: &mut [T; MAX_GROUP_VARS], n: usize) {
+    let mut p = packed;
+    for k in 0..n.min(MAX_GROUP_VARS) {
+        let r = (p & 15) as usize;
+        p >>= 4;
+        if r > k && r < MAX_GROUP_VARS {
+            b.swap(k, r);
         }
     }
 }
@@ -383,16 +420,15 @@ fn set2<T: Real>(f: &mut GroupVector<T>, ci: usize, r: Vec2<T>) {
     }
 }
 
-/// The Jacobian `W = ∂f/∂x` from the cached terms in an `N × N` matrix: the top-left `n × n` block, identity
-/// padding past it (`N = 2` for a dyad, [`MAX_GROUP_VARS`] for the larger groups).
-pub(crate) fn jacobian<T: Real, const N: usize>(
-    g: &Group<T>,
-    gd: &GroupData<T>,
-) -> SMatrix<T, N, N> {
+/// The Jacobian `W = ∂f/∂x` from the cached terms, as `N × N` rows: the top-left
+/// `n × n` block, identity padding past it (`N = 2` for a dyad, 4 for the triad,
+/// [`MAX_GROUP_VARS`] for the larger groups).
+#[inline]
+pub(crate) fn jacobian<T: Real, const N: usize>(g: &Group<T>, gd: &GroupData<T>) -> [[T; N]; N] {
     let n = g.n_vars as usize;
-    let mut w = SMatrix::<T, N, N>::zeros();
-    for k in n..N {
-        if let Some(e) = w.get_mut((k, k)) {
+    let mut w = [[T::zero(); N]; N];
+    for (k, row) in w.iter_mut().enumerate().skip(n) {
+        if let Some(e) = row.get_mut(k) {
             *e = T::one();
         }
     }
@@ -400,12 +436,15 @@ pub(crate) fn jacobian<T: Real, const N: usize>(
         if ch.end.is_none() {
             continue;
         }
+        let Some([wx, wy]) = w.get_mut(2 * ci..2 * ci + 2) else {
+            continue;
+        };
         for (t, c) in ch.terms.iter().zip(row.iter()) {
             term_columns(t, c, |k, col| {
-                if let Some(e) = w.get_mut((2 * ci, k as usize)) {
+                if let Some(e) = wx.get_mut(k as usize) {
                     *e += col.x;
                 }
-                if let Some(e) = w.get_mut((2 * ci + 1, k as usize)) {
+                if let Some(e) = wy.get_mut(k as usize) {
                     *e += col.y;
                 }
             });
@@ -414,8 +453,9 @@ pub(crate) fn jacobian<T: Real, const N: usize>(
     w
 }
 
-/// Inverts `W` into `gd.w_inv` and measures its conditioning; a dead point is an
-/// error (and leaves `gd.w_inv` as it was).
+/// Factors `W` into `gd.w_fact` (a dyad's inverse, a larger group's LU factors) and
+/// measures its conditioning; a dead point is an error (and leaves `gd.w_fact` as it
+/// was).
 pub(crate) fn factor<T: Real>(
     g: &Group<T>,
     gd: &mut GroupData<T>,
@@ -440,28 +480,37 @@ fn factor_n<T: Real, const N: usize>(
     singular_tol: T,
 ) -> Result<T, GroupFault> {
     let w = jacobian::<T, N>(g, gd);
-    // A dyad's 2×2 inverse in closed form; larger groups by Gauss-Jordan.
-    let (inv, det) = if let (Some(&a), Some(&b), Some(&c), Some(&d), 2) = (
-        w.get((0, 0)),
-        w.get((0, 1)),
-        w.get((1, 0)),
-        w.get((1, 1)),
-        N,
-    ) {
-        let det = a * d - b * c;
-        let id = T::one() / det;
-        let mut m = SMatrix::<T, N, N>::zeros();
-        for (e, v) in m.iter_mut().zip([d * id, -c * id, -b * id, a * id]) {
-            *e = v;
-        }
-        (m, det)
-    } else {
-        crate::linalg::invert(w, N).unwrap_or((SMatrix::identity(), T::zero()))
-    };
+    // The product of W's column norms (identity padding: 1 each), for the conditioning.
     let mut norms = T::one();
-    for col in w.column_iter() {
-        norms *= col.norm();
+    for c in 0..N {
+        let mut sq = T::zero();
+        for row in w.iter() {
+            let v = row.get(c).copied().unwrap_or(T::zero());
+            sq += v * v;
+        }
+        norms *= sq.sqrt();
     }
+    // A dyad's 2×2 inverse in closed form; larger groups by LU (n³/3, where an
+    // inverse costs n³: W is used for the 2 or 3 solves of the linear passes only).
+    let mut fact = w;
+    let mut piv = [0u8; N];
+    let det = match (N, w.first(), w.get(1)) {
+        (2, Some(r0), Some(r1)) => {
+            let e = |r: &[T; N], c: usize| r.get(c).copied().unwrap_or(T::zero());
+            let (a, b, c, d) = (e(r0, 0), e(r0, 1), e(r1, 0), e(r1, 1));
+            let det = a * d - b * c;
+            let id = T::one() / det;
+            for (k, v) in [d * id, -b * id, -c * id, a * id].into_iter().enumerate() {
+                if let Some(x) = fact.get_mut(k / 2).and_then(|r| r.get_mut(k % 2)) {
+                    *x = v;
+                }
+            }
+            det
+        }
+        // A failed factorisation (a vanishing pivot) is a dead point: det 0.
+        // (On the whole N × N matrix: its padding is the identity.)
+        _ => crate::linalg::lu(&mut fact, &mut piv).unwrap_or(T::zero()),
+    };
     let cond = if norms > T::zero() {
         det.abs() / norms
     } else {
@@ -473,14 +522,12 @@ fn factor_n<T: Real, const N: usize>(
             conditioning: cond.to_f64(),
         });
     }
-    // Only the top-left n × n block of `w_inv` is read.
-    for (c, col) in inv.column_iter().enumerate() {
-        for (r, v) in col.iter().enumerate() {
-            if let Some(e) = gd.w_inv.get_mut((r, c)) {
-                *e = *v;
-            }
+    for (dst, src) in gd.w_fact.iter_mut().zip(fact.iter()) {
+        for (e, v) in dst.iter_mut().zip(src.iter()) {
+            *e = *v;
         }
     }
+    gd.w_piv = pack_pivots(&piv);
     Ok(det)
 }
 
@@ -699,14 +746,30 @@ fn linear_pass<T: Real>(
             *fy = -r.y;
         }
     }
-    // u = W⁻¹ rhs; only the top-left n × n block of W⁻¹ is live.
+    // W u = rhs with W as `factor` left it, size by size: a dyad's inverse times rhs,
+    // a larger group's LU substitutions (only the top-left n × n block is live).
     let mut u = [T::zero(); MAX_GROUP_VARS];
-    for (r, ur) in u.iter_mut().enumerate().take(n) {
-        let mut acc = T::zero();
-        for (c, rc) in rhs.iter().enumerate().take(n) {
-            acc += gd.w_inv.get((r, c)).copied().unwrap_or(T::zero()) * *rc;
+    match n {
+        0 => {}
+        2 => {
+            for (ur, row) in u.iter_mut().zip(gd.w_fact.iter()).take(2) {
+                let mut acc = T::zero();
+                for (m, rc) in row.iter().zip(rhs.iter()).take(2) {
+                    acc += *m * *rc;
+                }
+                *ur = acc;
+            }
         }
-        *ur = acc;
+        4 => {
+            u = rhs;
+            permute(gd.w_piv, &mut u, 4);
+            crate::linalg::lu_substitute::<T, 4, MAX_GROUP_VARS>(&gd.w_fact, &mut u);
+        }
+        _ => {
+            u = rhs;
+            permute(gd.w_piv, &mut u, MAX_GROUP_VARS);
+            crate::linalg::lu_substitute::<T, MAX_GROUP_VARS, MAX_GROUP_VARS>(&gd.w_fact, &mut u);
+        }
     }
     *level.unknowns(gd) = u;
     // Each placement's anchor: its chain's start plus its prefix of whole term

@@ -218,7 +218,7 @@ pub(crate) fn solve<T: Real>(
         ((1, 0), -wa.x * id),
         ((1, 1), -wa.y * id),
     ] {
-        if let Some(m) = gd.w_inv.get_mut((r, k)) {
+        if let Some(m) = gd.w_fact.get_mut(r).and_then(|row| row.get_mut(k)) {
             *m = v;
         }
     }
@@ -238,7 +238,13 @@ pub(crate) fn solve<T: Real>(
 /// `W⁻¹ r` for the dyad's 2 × 2 block.
 #[inline]
 fn solve_2<T: Real>(gd: &GroupData<T>, r: Vec2<T>) -> [T; 2] {
-    let m = |i: usize, k: usize| gd.w_inv.get((i, k)).copied().unwrap_or(T::zero());
+    let m = |i: usize, k: usize| {
+        gd.w_fact
+            .get(i)
+            .and_then(|row| row.get(k))
+            .copied()
+            .unwrap_or(T::zero())
+    };
     [m(0, 0) * r.x + m(0, 1) * r.y, m(1, 0) * r.x + m(1, 1) * r.y]
 }
 

@@ -35,7 +35,7 @@ pub mod pole;
 pub mod triad;
 
 pub use assur::{AssurGroup, AssurJoint, AssurLoop, AssurStep};
-pub use chain::{GroupData, GroupMatrix, GroupVector, TermCache};
+pub use chain::{GroupData, GroupVector, TermCache};
 pub use dyad_rrr::DyadRrr;
 pub use dyad_rrt::DyadRrt;
 pub use dyad_rtr::DyadRtr;

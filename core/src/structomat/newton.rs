@@ -6,19 +6,24 @@
 //! `gd.x`, the previous configuration, which keeps the assembly branch as long as the
 //! motion does not cross a singular position (checked by the sign of det W). The warm
 //! start is first moved along the group's transmission functions (`predict`): from
-//! `x(q₀)` to `x(q₀) + C (q - q₀)`, whose error is second order in `q - q₀`.
+//! `x(q₀)` to `x(q₀) + C (q - q₀)` plus the second-order term along the rates of that
+//! evaluation, whose error is third order in `q - q₀`.
 
 use super::chain::{chain_gaps, eval_terms, jacobian, position_from_terms, residual};
-use super::{Base, Group, GroupData, Term};
+use super::{Base, Group, GroupData, GroupKind, Term};
 use crate::config::{MAX_DOF, MAX_GROUP_VARS, NEWTON_MAX_ITER};
 use crate::error::GroupFault;
 use crate::model::Model;
-use crate::scalar::Real;
+use crate::scalar::{Real, Vec2};
 use crate::workspace::BodyState;
-use nalgebra::SVector;
 
 /// Bit k set when unknown k is an angle (it turns a term), else a slide length.
 fn angle_mask<T: Real>(g: &Group<T>) -> u8 {
+    // The triad's and a general Assur group's unknowns are all link angles (their
+    // builders make arms only, unknown k turning its link's): no scan of the terms.
+    if matches!(g.kind, GroupKind::Triad | GroupKind::Assur) {
+        return u8::try_from((1u16 << g.n_vars.min(8)) - 1).unwrap_or(u8::MAX);
+    }
     let mut m = 0u8;
     for t in g.chains.iter().flat_map(|c| c.terms.iter()) {
         let (Term::Arm { angle, .. } | Term::Slide { angle, .. }) = t;
@@ -29,13 +34,27 @@ fn angle_mask<T: Real>(g: &Group<T>) -> u8 {
     m
 }
 
-/// First-order predictor of the warm start: `x += C (q - q_C)` with `C = ∂x/∂q` as the
-/// last evaluation recorded it at `(q_C, x_C)` (`gd.dx_dq_at`), when `gd.x` is still
-/// that `x_C` (a caller that restored older unknowns, or a fresh assembly, keeps its
-/// warm start as it is). Returns whether it moved the start: not at `q = q_C`, where
-/// the start is the solution recorded there (so a re-evaluation of a state, as after a
-/// refused step, reproduces its bits).
-fn predict<T: Real>(gd: &mut GroupData<T>, n: usize, q: &[T]) -> bool {
+/// Predictor of the warm start, to second order: `x += C dq + ½ s² ẍ_b` with
+/// `dq = q - q_C`, `C = ∂x/∂q` as the last evaluation recorded it at `(q_C, x_C)`
+/// (`gd.dx_dq_at`), `ẍ_b = ∂²x/∂q² [q̇_C, q̇_C]` its bias accelerations (`gd.xdd_bias`,
+/// `ẍ` at `q̈ = 0`) and `q̇_C = qd` its rates, and `s = (dq · q̇_C) / (q̇_C · q̇_C)`: the
+/// Taylor series of `x(q)` to second order along `q̇_C`. With one degree of freedom
+/// that is the whole second-order term (`½ dq² ∂²x/∂q²`); with more, it is the
+/// term along the trajectory, where a step's stages move (`dq = q̇_C h + O(h²)`).
+/// The error is then third order, and the one Newton step a predicted start takes
+/// converges (from the first-order start, about one solve in seven of S2's A68/crank
+/// steps took a second). Without usable rates (zero, not finite, none given) or bias, the predictor is
+/// first order (`x += C dq`). After a velocities-only evaluation
+/// ([`transmission::evaluate_velocities`](crate::transmission::evaluate_velocities))
+/// the bias is that of the last full evaluation, nearby on the same trajectory: an
+/// estimate, which costs at most a Newton step.
+///
+/// It moves the start only when `gd.x` is still that `x_C` (a caller that restored
+/// older unknowns, or a fresh assembly, keeps its warm start as it is). Returns
+/// whether it moved the start: not at `q = q_C`, where the start is the solution
+/// recorded there (so a re-evaluation of a state, as after a refused step, reproduces
+/// its bits).
+fn predict<T: Real>(gd: &mut GroupData<T>, n: usize, q: &[T], qd: &[T]) -> bool {
     let (q_c, x_c) = &gd.dx_dq_at;
     if gd.x != *x_c {
         return false;
@@ -47,28 +66,44 @@ fn predict<T: Real>(gd: &mut GroupData<T>, n: usize, q: &[T]) -> bool {
     if dq.iter().all(|d| *d == T::zero()) {
         return false;
     }
-    for (k, x) in gd.x.iter_mut().enumerate().take(n) {
+    // s is the time (s) the rates take to cover dq's part along them; ½ s² ẍ_b is in
+    // x's units.
+    let (mut along, mut norm2) = (T::zero(), T::zero());
+    for (d, r) in dq.iter().zip(qd.iter()) {
+        along += *d * *r;
+        norm2 += *r * *r;
+    }
+    let s = along / norm2;
+    let mut half_s2 = T::c(0.5) * s * s;
+    let bias_ok = gd.xdd_bias.iter().take(n).all(|b| (*b * half_s2).finite());
+    if !(norm2 > T::zero() && half_s2.finite() && bias_ok) {
+        half_s2 = T::zero();
+    }
+    for (k, (x, b)) in gd.x.iter_mut().zip(gd.xdd_bias.iter()).enumerate().take(n) {
         for (j, d) in dq.iter().enumerate() {
             *x += gd.dx_dq.get((k, j)).copied().unwrap_or(T::zero()) * *d;
         }
+        *x += half_s2 * *b;
     }
     true
 }
 
 /// Solves `f(x) = 0` from `gd.x`, then caches the terms, factors W and places the links.
-/// Returns det W.
+/// `qd` are the rates of the last evaluation (the predictor's, see `predict`; empty for
+/// none). Returns det W.
 pub(crate) fn solve<T: Real>(
     g: &Group<T>,
     gd: &mut GroupData<T>,
     model: &Model<T>,
     bodies: &mut [BodyState<T>],
     q: &[T],
+    qd: &[T],
 ) -> Result<T, GroupFault> {
     // n is even (two rows per closing chain): each size with its own fixed matrices.
     match g.n_vars {
-        2 => solve_n::<T, 2>(g, gd, model, bodies, q),
-        4 => solve_n::<T, 4>(g, gd, model, bodies, q),
-        _ => solve_n::<T, MAX_GROUP_VARS>(g, gd, model, bodies, q),
+        2 => solve_n::<T, 2>(g, gd, model, bodies, q, qd),
+        4 => solve_n::<T, 4>(g, gd, model, bodies, q, qd),
+        _ => solve_n::<T, MAX_GROUP_VARS>(g, gd, model, bodies, q, qd),
     }
 }
 
@@ -79,6 +114,7 @@ fn solve_n<T: Real, const N: usize>(
     model: &Model<T>,
     bodies: &mut [BodyState<T>],
     q: &[T],
+    qd: &[T],
 ) -> Result<T, GroupFault> {
     let n = (g.n_vars as usize).min(N);
     let tol = model.newton_tol();
@@ -87,14 +123,14 @@ fn solve_n<T: Real, const N: usize>(
     // A predicted start within the tolerance still takes one step: the solution keeps
     // the accuracy of a converged Newton step (far below the tolerance), not the
     // predictor's.
-    let predicted = predict(gd, n, q);
+    let predicted = predict(gd, n, q, qd);
     // The chains' ends are known points: placed before the group, fixed while it solves.
     let gaps = chain_gaps(g, model, bodies);
     for it in 0..NEWTON_MAX_ITER {
         for (k, (x, cs)) in gd.x.iter().zip(gd.trig.iter_mut()).enumerate().take(n) {
             if angles & (1 << k) != 0 {
                 let (s, c) = x.sin_cos();
-                *cs = nalgebra::Vector2::new(c, s);
+                *cs = Vec2::new(c, s);
             }
         }
         eval_terms(g, gd, bodies, q);
@@ -108,13 +144,18 @@ fn solve_n<T: Real, const N: usize>(
             // The terms are cached at this `x` (just evaluated for the residual).
             return position_from_terms(g, gd, model, bodies, q);
         }
-        // The step solves W dx = f (no inverse: `factor` inverts W once, at the
-        // solution).
-        let w = jacobian::<T, N>(g, gd);
-        let f_n = SVector::<T, N>::from_fn(|r, _| f.get(r).copied().unwrap_or(T::zero()));
-        let Some(dx) = crate::linalg::solve(w, f_n) else {
+        // The step solves W dx = f by elimination (`factor` factors W once more, at
+        // the solution, for the linear passes).
+        let mut w = jacobian::<T, N>(g, gd);
+        let mut dx = [T::zero(); N];
+        for (d, v) in dx.iter_mut().zip(f.iter()) {
+            *d = *v;
+        }
+        let mut piv = [0u8; N];
+        if crate::linalg::lu(&mut w, &mut piv).is_none() {
             return Err(GroupFault::Singular { conditioning: 0.0 });
-        };
+        }
+        crate::linalg::lu_solve::<T, N, N>(&w, &piv, &mut dx);
         for (x, d) in gd.x.iter_mut().zip(dx.iter()).take(n) {
             *x -= *d;
         }
