@@ -435,6 +435,10 @@ pub struct Twin<T: Real> {
     switches: heapless::Vec<CoordinateSwitch<T>, { MAX_RETRIES + 1 }>,
     candidates: heapless::Vec<(Mode, T), 8>,
     speed_gap: T,
+    /// `c` came from the mode choice's screen, not from the current slot's
+    /// kinetostatics (see [`Twin::try_candidate`]): a state is committed only with
+    /// the latter, which a re-evaluation of it (after a failed step) reproduces.
+    c_screened: bool,
 }
 
 /// The working state of a step, committed only when the whole step succeeds.
@@ -536,6 +540,7 @@ impl<T: Real> Twin<T> {
             switches: heapless::Vec::new(),
             candidates: heapless::Vec::new(),
             speed_gap: T::zero(),
+            c_screened: false,
         };
         for (p, l) in twin.links.iter_mut().enumerate() {
             l.theta = pose[p];
@@ -551,6 +556,7 @@ impl<T: Real> Twin<T> {
         if settings.clutch {
             twin.choose(&mut w, EventKind::Start, &inputs)?;
         }
+        twin.settle_clutch_torques(&w, &inputs)?;
         twin.y = w.y;
         let links = twin.slots.cur().links(&twin.params);
         let audit = twin.audit_of(&links, &w);
@@ -825,6 +831,15 @@ impl<T: Real> Twin<T> {
             w.t = t_end;
             self.dp5.invalidate();
         }
+        self.settle_clutch_torques(w, inputs)
+    }
+
+    /// The kinetostatics of the state the step ends at, if its clutch torques are
+    /// still the mode choice's screen's (the choice was the step's last evaluation).
+    fn settle_clutch_torques(&mut self, w: &Work<T>, inputs: &Inputs<T>) -> Result<(), TwinError> {
+        if self.c_screened {
+            self.finish_evaluated(w, inputs)?;
+        }
         Ok(())
     }
 
@@ -934,18 +949,20 @@ impl<T: Real> Twin<T> {
         let slot = self.slots.cur_mut();
         finish_accelerations(&slot.model, &mut slot.ws);
         reactions(&slot.model, &mut slot.ws, w.t.to_f64()).map_err(|e| self.physical_error(e))?;
-        self.read_evaluation(inputs);
+        self.read_evaluation(inputs, None);
         Ok(())
     }
 
     /// The clutch torques and the event functions from the slot's workspace, which
-    /// holds a full evaluation (accelerations and kinetostatics). Not inlined: inlined
+    /// holds a full evaluation (accelerations and kinetostatics; or accelerations and
+    /// the clutch torques `c`, from the mode choice's screen). Not inlined: inlined
     /// into the mode choice it added 3.7 KB to the f64 step's stack high-water
     /// (`tests/footprint.rs`: 19.1 KB instead of 15.5 KB).
     #[inline(never)]
-    fn read_evaluation(&mut self, inputs: &Inputs<T>) {
+    fn read_evaluation(&mut self, inputs: &Inputs<T>, c: Option<[T; 2]>) {
         let links = self.slots.cur().links(&self.params);
-        self.c = self.slots.cur().clutch_torques(&self.params, &links);
+        self.c_screened = c.is_some();
+        self.c = c.unwrap_or_else(|| self.slots.cur().clutch_torques(&self.params, &links));
         self.guards = self.guards_of(self.slots.cur(), &links, &self.c, inputs);
         self.guard_rates = self.guard_rates_of(self.slots.cur(), &links);
     }
@@ -1334,6 +1351,9 @@ impl<T: Real> Twin<T> {
         let mut yr_at = yr;
         // Candidates the screen found clearly inconsistent, not built.
         let mut screened_out = false;
+        // The clutch torques of the pick if they came from the screen (its model's
+        // kinetostatics skipped, see `Twin::try_candidate`).
+        let mut chosen_c = None;
         self.candidates.clear();
         for (_, m) in cands.iter().copied() {
             let rows = constraint_rows(m, with_shaft, |lever| self.reference.lever_row(lever));
@@ -1341,16 +1361,21 @@ impl<T: Real> Twin<T> {
                 let _ = self.candidates.push((m, T::c(f64::INFINITY)));
                 continue; // rank-deficient constraints
             };
-            let violation = match self.screen(m, from, &mut yr_at, &u_plus, w.t, inputs, tol_w) {
-                Some(v) if v > screen_margin::<T>() => {
+            let (violation, c) = match self.screen(m, from, &mut yr_at, &u_plus, w.t, inputs, tol_w)
+            {
+                Some((v, _)) if v > screen_margin::<T>() => {
                     screened_out = true;
-                    v
+                    (v, None)
                 }
-                _ => self.try_candidate(w, m, &pose, &u_plus, from, inputs, tol_w)?,
+                screened => {
+                    let c = screened.map(|(_, c)| c);
+                    self.try_candidate(w, m, &pose, &u_plus, from, inputs, tol_w, c)?
+                }
             };
             let _ = self.candidates.push((m, violation));
             if violation <= T::zero() {
                 chosen = Some((m, loss, rows_mismatch(&rows, &u), true));
+                chosen_c = c;
                 break;
             }
             if best.as_ref().is_none_or(|(v, _)| violation < *v) {
@@ -1369,7 +1394,9 @@ impl<T: Real> Twin<T> {
                     let rows =
                         constraint_rows(m, with_shaft, |lever| self.reference.lever_row(lever));
                     if let Some((u_plus, _)) = project(&mass, &u, &rows) {
-                        v = self.try_candidate(w, m, &pose, &u_plus, from, inputs, tol_w)?;
+                        v = self
+                            .try_candidate(w, m, &pose, &u_plus, from, inputs, tol_w, None)?
+                            .0;
                     }
                 }
                 if let Some(c) = self.candidates.get_mut(i) {
@@ -1396,7 +1423,7 @@ impl<T: Real> Twin<T> {
                 );
                 let rows = constraint_rows(m, with_shaft, |lever| self.reference.lever_row(lever));
                 let (u_plus, loss) = project(&mass, &u, &rows).unwrap_or((u, T::zero()));
-                self.try_candidate(w, m, &pose, &u_plus, from, inputs, tol_w)?;
+                self.try_candidate(w, m, &pose, &u_plus, from, inputs, tol_w, None)?;
                 (m, loss, rows_mismatch(&rows, &u), false)
             }
         };
@@ -1411,9 +1438,10 @@ impl<T: Real> Twin<T> {
         self.dp5.invalidate();
         if consistent {
             // `try_candidate` evaluated the chosen mode in full (kinetostatics
-            // included) at this very state, `w.y` being read back from it: evaluating
-            // again would give the same bits.
-            self.read_evaluation(inputs);
+            // included, or its clutch torques `chosen_c` from the screen) at this very
+            // state, `w.y` being read back from it: evaluating again would give the
+            // same bits.
+            self.read_evaluation(inputs, chosen_c);
             self.seed_first_stage(w, inputs);
         } else {
             self.finish(w, inputs)?;
@@ -1474,7 +1502,8 @@ impl<T: Real> Twin<T> {
         from: Mode,
         inputs: &Inputs<T>,
         tol_w: T,
-    ) -> Result<T, TwinError> {
+        screened: Option<[T; 2]>,
+    ) -> Result<(T, Option<[T; 2]>), TwinError> {
         // Physical angular speeds after the impact, from the reference model's V.
         let mut omega = [T::zero(); 9];
         for (p, o) in omega.iter_mut().enumerate().skip(1) {
@@ -1560,24 +1589,29 @@ impl<T: Real> Twin<T> {
             }
             (None, _) => false,
         };
-        // The kinetostatics (the clutch torques) of the choice taken only.
+        // The kinetostatics (the clutch torques) of the choice taken only, and not
+        // even of it when the screen's clutch torques are clear of the conditions'
+        // thresholds: the signs that decide then read the same from either (they
+        // differ by rounding), and the screen's torques stand for the model's until
+        // the next full evaluation (8.3k instructions of S2's worst event step).
+        let clear = screened.filter(|c| torques_clear(m, c, inputs));
         let (cand, params) = self.scratch(w.switched);
         let ok = ok && {
             finish_accelerations(&cand.model, &mut cand.ws);
-            reactions(&cand.model, &mut cand.ws, w.t.to_f64()).is_ok()
+            clear.is_some() || reactions(&cand.model, &mut cand.ws, w.t.to_f64()).is_ok()
         };
         if !ok {
-            return Ok(T::c(f64::INFINITY));
+            return Ok((T::c(f64::INFINITY), None));
         }
         let links = cand.links(params);
-        let c = cand.clutch_torques(params, &links);
+        let c = clear.unwrap_or_else(|| cand.clutch_torques(params, &links));
         log::debug!(
             "candidate {m}: c = {:?}, alpha6 = {:?}, alpha8 = {:?}",
             c,
             links[6].alpha,
             links[8].alpha,
         );
-        Ok(self.violation(m, from, &c, &links, inputs, tol_w))
+        Ok((self.violation(m, from, &c, &links, inputs, tol_w), clear))
     }
 
     /// How far mode `m` (entered from `from`) with the clutch torques `c` and the
@@ -1634,7 +1668,8 @@ impl<T: Real> Twin<T> {
 
     /// Mode `m`'s violation of SPEC 3's consistency conditions (as
     /// [`Twin::violation`]) from the reference model (I0, both levers free), without
-    /// building `m`'s model: `None` if it cannot tell. At the state `yr` with the
+    /// building `m`'s model, with its clutch torques (N·m): `None` if it cannot tell.
+    /// At the state `yr` with the
     /// speeds `u_plus` after the impact projection, the reference's equations of motion
     /// `M q̈ = Q` with the shaft as a third coordinate (inertia J_s, possibly 0; the load
     /// -d·T_r on it while it turns) and `m`'s clutches as constraints on the
@@ -1654,7 +1689,7 @@ impl<T: Real> Twin<T> {
         t: T,
         inputs: &Inputs<T>,
         tol_w: T,
-    ) -> Option<T> {
+    ) -> Option<(T, [T; 2])> {
         let d = self.drive;
         // The reference evaluated at the candidate's speeds, unless the speeds `yr` its
         // workspace holds differ from them by under 1e-3 of the screen's margin
@@ -1729,7 +1764,7 @@ impl<T: Real> Twin<T> {
             l.omega = v[0] * u_plus[0] + v[1] * u_plus[1];
             l.alpha = v[0] * x[0] + v[1] * x[1] + r.alpha_bias(p);
         }
-        Some(self.violation(m, from, &c, &links, inputs, tol_w))
+        Some((self.violation(m, from, &c, &links, inputs, tol_w), c))
     }
 
     /// Builds mode `m` driven by `coords` at `pose` with the physical speeds `omega`
@@ -2439,6 +2474,31 @@ fn speed_scale<T: Real>(links: &[LinkState<T>; 9]) -> T {
 /// rounding, ~1e-12 of the scales in f64). Near 0 the built model decides.
 fn screen_margin<T: Real>() -> T {
     T::c(1e-6).max(T::EPS * T::c(1e4))
+}
+
+/// Whether mode `m`'s clutch torques `c` (N·m, from [`Twin::screen`]) are clear of
+/// [`Twin::violation`]'s torque conditions by [`screen_margin`] of its torque scale:
+/// each locked or engaged lever's `c_k` over its threshold, and a held shaft's locked
+/// torques under `T_r`, by that much. Its own model's kinetostatics, which differ by
+/// rounding, would then decide those conditions alike.
+fn torques_clear<T: Real>(m: Mode, c: &[T; 2], inputs: &Inputs<T>) -> bool {
+    let scale = inputs.load + T::one() + c[0].abs() + c[1].abs();
+    let clear = torque_tol(scale) + screen_margin::<T>() * scale;
+    let mut locked = T::zero();
+    for (ck, clutch) in c.iter().zip(m.clutches()) {
+        match clutch {
+            Clutch::Free => {}
+            Clutch::Locked | Clutch::Engaged => {
+                if !(*ck > clear) {
+                    return false;
+                }
+                if clutch == Clutch::Locked {
+                    locked += *ck;
+                }
+            }
+        }
+    }
+    m.shaft_turning() || locked < inputs.load - clear
 }
 
 /// Relative threshold on angular speeds (of the largest): whether a lever touches the
