@@ -9,7 +9,7 @@ use crate::integrator::{Adaptive, AdaptiveError, AdaptiveStats, Dp5, OdeSystem};
 use crate::kinematics::assemble;
 use crate::kinetostatics::reactions;
 use crate::model::Model;
-use crate::scalar::Real;
+use crate::scalar::{Real, Vec2};
 use crate::workspace::Workspace;
 use core::fmt;
 use nalgebra::SVector;
@@ -187,7 +187,10 @@ impl<T: Real> Simulation<T> {
         ) -> Result<R, E>,
         wrap: fn(StepError) -> E,
     ) -> Result<R, E> {
-        let saved: [[T; MAX_GROUP_VARS]; MAX_GROUPS] = core::array::from_fn(|k| self.ws.group[k].x);
+        // The groups' unknowns with their cosines and sines (`GroupData::trig`): a
+        // step taken back restores both, so its re-evaluation reproduces the state.
+        let saved: [([T; MAX_GROUP_VARS], [Vec2<T>; MAX_GROUP_VARS]); MAX_GROUPS] =
+            core::array::from_fn(|k| (self.ws.group[k].x, self.ws.group[k].trig));
         let t_next = T::c((self.steps + 1) as f64) * self.h;
         if !t_next.finite() {
             return Err(wrap(StepError::NonFinite {
@@ -222,8 +225,11 @@ impl<T: Real> Simulation<T> {
                     self.y = y0;
                     self.dp5.invalidate();
                 }
-                for (gd, x) in self.ws.group.iter_mut().zip(saved.iter()) {
+                for (gd, (x, trig)) in self.ws.group.iter_mut().zip(saved.iter()) {
                     gd.x = *x;
+                    gd.trig = *trig;
+                    // The saved cosines and sines were those of the saved unknowns.
+                    gd.trig_at = *x;
                 }
                 // Re-evaluate at the last good state (it evaluated before, from the same
                 // warm start): the workspace describes the state again.

@@ -441,6 +441,11 @@ pub struct Twin<T: Real> {
     c_screened: bool,
 }
 
+/// Each group's unknowns, as a step found them.
+type GroupUnknowns<T> = [[T; crate::config::MAX_GROUP_VARS]; crate::config::MAX_GROUPS];
+/// Their cosines and sines (`GroupData::trig`).
+type GroupTrig<T> = [[Vec2<T>; crate::config::MAX_GROUP_VARS]; crate::config::MAX_GROUPS];
+
 /// The working state of a step, committed only when the whole step succeeds.
 struct Work<T: Real> {
     t: T,
@@ -573,7 +578,7 @@ impl<T: Real> Twin<T> {
     pub fn step(&mut self, inputs: &Inputs<T>) -> Result<(), TwinError> {
         check_inputs(inputs)?;
         let changed = !same_inputs(&self.inputs, inputs);
-        let saved = self.group_unknowns();
+        let saved = (self.group_unknowns(), self.group_trig());
         // The last good step's log: an attempt rewrites it. Usually empty (events and
         // switches are rare), so the copy costs next to nothing.
         let log = (
@@ -779,7 +784,9 @@ impl<T: Real> Twin<T> {
             match self.dp5.step(&mut sys, &mut w.t, &mut w.y, h) {
                 Ok(_) => {}
                 Err(e) => {
-                    self.set_group_unknowns(&saved);
+                    // Warm starts only: the step goes on from here (the cosines
+                    // and sines are taken anew from these unknowns).
+                    self.set_group_unknowns(&saved, None);
                     w.t = t0;
                     w.y = y0;
                     if retries >= MAX_RETRIES || !matches!(e, StepError::Group { .. }) {
@@ -878,16 +885,13 @@ impl<T: Real> Twin<T> {
     }
 
     /// Back to the state before the step: the pre-step slot (kept by
-    /// [`Twin::take_candidate`] if the step changed it) with its group unknowns `saved`.
-    fn restore(
-        &mut self,
-        switched: bool,
-        saved: &[[T; crate::config::MAX_GROUP_VARS]; crate::config::MAX_GROUPS],
-    ) {
+    /// [`Twin::take_candidate`] if the step changed it) with its group unknowns and
+    /// their cosines and sines `saved`.
+    fn restore(&mut self, switched: bool, saved: &(GroupUnknowns<T>, GroupTrig<T>)) {
         if switched {
             self.slots.role.swap(0, 1);
         }
-        self.set_group_unknowns(saved);
+        self.set_group_unknowns(&saved.0, Some(&saved.1));
         self.dp5.invalidate();
         self.last_guards = None;
         let mut w = self.work_from_state();
@@ -897,23 +901,42 @@ impl<T: Real> Twin<T> {
         let _ = self.finish(&mut w, &inputs);
     }
 
-    fn group_unknowns(&self) -> [[T; crate::config::MAX_GROUP_VARS]; crate::config::MAX_GROUPS] {
+    fn group_unknowns(&self) -> GroupUnknowns<T> {
+        let ws = &self.slots.cur().ws;
         core::array::from_fn(|k| {
-            self.slots
-                .cur()
-                .ws
-                .group
+            ws.group
                 .get(k)
                 .map_or([T::zero(); crate::config::MAX_GROUP_VARS], |g| g.x)
         })
     }
 
-    fn set_group_unknowns(
-        &mut self,
-        x: &[[T; crate::config::MAX_GROUP_VARS]; crate::config::MAX_GROUPS],
-    ) {
-        for (g, x) in self.slots.cur_mut().ws.group.iter_mut().zip(x.iter()) {
+    fn group_trig(&self) -> GroupTrig<T> {
+        let ws = &self.slots.cur().ws;
+        core::array::from_fn(|k| {
+            ws.group.get(k).map_or(
+                [Vec2::new(T::one(), T::zero()); crate::config::MAX_GROUP_VARS],
+                |g| g.trig,
+            )
+        })
+    }
+
+    /// Sets the groups' unknowns `x` and, if given, their cosines and sines (those of
+    /// `x`, saved with them: a re-evaluation then reproduces the saved state's bits).
+    fn set_group_unknowns(&mut self, x: &GroupUnknowns<T>, trig: Option<&GroupTrig<T>>) {
+        for (k, (g, x)) in self
+            .slots
+            .cur_mut()
+            .ws
+            .group
+            .iter_mut()
+            .zip(x.iter())
+            .enumerate()
+        {
             g.x = *x;
+            if let Some(cs) = trig.and_then(|t| t.get(k)) {
+                g.trig = *cs;
+                g.trig_at = *x;
+            }
         }
     }
 

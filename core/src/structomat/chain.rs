@@ -44,8 +44,14 @@ pub struct GroupData<T: Real> {
     /// Their accelerations.
     pub xdd: [T; MAX_GROUP_VARS],
     /// `(cos, sin)` of each angle unknown at `x`: set by the closed forms from the
-    /// vectors they construct, or by Newton from `x` (slides: unused).
+    /// vectors they construct, or by Newton from `x` or turned along with its
+    /// corrections (slides: unused).
     pub trig: [Vec2<T>; MAX_GROUP_VARS],
+    /// The unknowns `trig` belongs to (Newton's): Newton starts from `trig` as it is
+    /// for an unknown still at exactly this value (a re-evaluation of a state then
+    /// reproduces its bits), and takes the sine and cosine anew otherwise (a moved
+    /// start, unknowns set from outside).
+    pub trig_at: [T; MAX_GROUP_VARS],
     /// Assembly branch of a closed form (+1 or -1), chosen at assembly from the guesses.
     pub branch: T,
     /// Sign of det W at assembly (the branch of a Newton group).
@@ -88,6 +94,7 @@ impl<T: Real> Default for GroupData<T> {
             xd: [T::zero(); MAX_GROUP_VARS],
             xdd: [T::zero(); MAX_GROUP_VARS],
             trig: [Vec2::new(T::one(), T::zero()); MAX_GROUP_VARS],
+            trig_at: [T::zero(); MAX_GROUP_VARS],
             branch: T::one(),
             det_sign: T::zero(),
             w_fact: core::array::from_fn(|r| {
