@@ -165,6 +165,15 @@ impl<T: Real> Workspace<T> {
     /// Back to the state of [`Workspace::new`], in place (a 13 KB workspace in f64 is
     /// not rebuilt on the stack).
     pub fn reset(&mut self) {
+        self.reset_but_groups(0);
+    }
+
+    /// [`Workspace::reset`] but for the data of the first `n` groups, left as they are:
+    /// for [`assemble`](crate::kinematics::assemble) of a model of `n` groups, which
+    /// sets each group's data to its default before it solves it (once it succeeds,
+    /// the workspace is the one a full reset would have given; most of the 13 KB are
+    /// the 8 groups' data).
+    pub fn reset_but_groups(&mut self, n: usize) {
         let Workspace {
             body,
             group,
@@ -182,15 +191,18 @@ impl<T: Real> Workspace<T> {
             evaluations,
         } = self;
         body.fill(BodyState::default());
-        group.fill(GroupData::default());
+        if let Some(rest) = group.get_mut(n..) {
+            rest.fill(GroupData::default());
+        }
         q.fill(T::zero());
         qd.fill(T::zero());
         qdd.fill(T::zero());
-        v.fill(T::zero());
-        a_bias.fill(T::zero());
-        force.fill(T::zero());
-        mass_q.fill_with_identity();
-        gen_force.fill(T::zero());
+        // Whole-matrix stores (a memset), not nalgebra's element-by-element `fill`.
+        *v = SMatrix::zeros();
+        *a_bias = SVector::zeros();
+        *force = SVector::zeros();
+        *mass_q = SMatrix::identity();
+        *gen_force = SVector::zeros();
         motor.fill(T::zero());
         applied_moment.fill(T::zero());
         reactions.fill([Reaction::default(); MAX_GROUP_JOINTS]);

@@ -134,7 +134,8 @@ impl<T: Real> Slot<T> {
         })?;
         self.mode = mode;
         self.coords = coords;
-        self.ws.reset();
+        // `assemble` resets the data of the model's groups itself.
+        self.ws.reset_but_groups(self.model.groups().len());
         let q = self.assemble_at(pose, time)?;
         self.built = true;
         Ok(q)
