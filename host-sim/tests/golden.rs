@@ -88,19 +88,19 @@ const PINS: &[Pin<'static>] = &[
     Pin {
         args: "ccc-s2",
         exit: 0,
-        csv: "e26310b8537ac8fb31dd50527f02fc4b42092710e7242d1de71443f7d1a1dd04",
+        csv: "73fcce8dc3ab7f56901344fa395f3ffd31cf2c29e9d0cfd230af169ef0b8f881",
         logs: Some((
-            "d7993653646b601e9105436c268ce71c7d82d1bb59ddf79d6e04a4f143ab5a2c",
-            "ea0964e6241ba6faacec34937b52c42906a47ee9385c178d8d9d8681a60091c8",
+            "42a7b9fe0b14c80e62d7f096ef174a3a6ddecd3eb9b273b56bdca9f894da999e",
+            "8dfc3b32275d05975c5fe215194c3aa68a11dcc9779e57579d9aec9ed0069830",
         )),
     },
     Pin {
         args: "ccc-s2 --ccw",
         exit: 0,
-        csv: "cd9355dff10cecd94e84dd39513f937a9b30a5ca1c3c1e0dbe8409328c29518e",
+        csv: "cd92c47c8d1f1a01732be5acca82ab54ce5927974425ebe91b9a0f2747a6f7b1",
         logs: Some((
-            "88ee27b4bd1ec02dcaef7beec9bb7e0d7e5086917d32076b188d793200b5d786",
-            "7b899406364e9f8d01c3e6263681bc40b52e70f34c5cfcec78a4379f4ae6e0cf",
+            "9e1a82f4b03bb7e30a146afd35024a1e2e8d40ac798fb599ce576d7a221c0e0b",
+            "5d10d2998408b250a6cb88574e160e3ac1ec925769e131f6f21ec5e84544de1e",
         )),
     },
     Pin {
@@ -121,10 +121,10 @@ const PINS: &[Pin<'static>] = &[
     Pin {
         args: "ccc-s2 --f32",
         exit: 0,
-        csv: "8a712d4e01cd183a0a32e10f9e71e85c974041e83c63642d0ea669b586c51484",
+        csv: "47e5df2a8b1b52de806e07567f8b16a26ac83a34fc36702c64ef1c114cd53356",
         logs: Some((
-            "12a1081a0f3565e0aa4d203aa73f102427b367ce093521b83d135e254a7a288f",
-            "6a41927ea9e64a092f604483b76984cd2938e8e158d6c86ff515e6b6c2537311",
+            "cc655b265ca0291849da9b0e3a8af332d66f1f18dfc8ab51bc533ddf333b3e35",
+            "8bb304fc9aba3f78d221f30191da0a2b559dfb61345ee253c1e9c7fd955161f9",
         )),
     },
 ];
