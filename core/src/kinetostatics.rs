@@ -630,7 +630,7 @@ impl<T: Real> Equilibrium<T> {
                     *e = T::one();
                 }
             }
-            if !crate::linalg::solve_rows(&mut sa, &mut sb, R) {
+            if !crate::linalg::solve_in_place(&mut sa, &mut sb) {
                 return Some(false);
             }
             for (x, v) in b.iter_mut().zip(sb) {
@@ -642,7 +642,7 @@ impl<T: Real> Equilibrium<T> {
                     *e = T::one();
                 }
             }
-            if !crate::linalg::solve_rows(&mut a, &mut b, N) {
+            if !crate::linalg::solve_in_place(&mut a, &mut b) {
                 return Some(false);
             }
         }

@@ -27,24 +27,9 @@ fn swap<X, const N: usize>(m: &mut [X; N], i: usize, j: usize) {
     }
 }
 
-/// Partial pivoting: the row (from `k` up to `n`) of the largest entry of column `k`;
-/// `None` if that entry is zero or not finite.
-fn pivot<T: Real, const N: usize>(m: &[[T; N]; N], k: usize, n: usize) -> Option<usize> {
-    let mut p = k;
-    let mut best = T::zero();
-    for (r, row) in m.get(k..n)?.iter().enumerate() {
-        let v = row.get(k)?.abs();
-        if v > best {
-            best = v;
-            p = k + r;
-        }
-    }
-    (best > T::zero() && best.finite()).then_some(p)
-}
-
-/// Solves `A x = b` by Gaussian elimination with partial pivoting (`N` ≤ 12 here: a
-/// group's equilibrium). `None` if a pivot vanishes or is not finite. Bounded work:
-/// `N³/3` multiply-adds, no iteration.
+/// Solves `A x = b` by Gaussian elimination with partial pivoting ([`lu`], then
+/// [`lu_solve`]). `None` if a pivot vanishes or is not finite. Bounded work: `N³/3`
+/// multiply-adds, no iteration.
 pub fn solve<T: Real, const N: usize>(
     a: SMatrix<T, N, N>,
     b: SVector<T, N>,
@@ -54,46 +39,18 @@ pub fn solve<T: Real, const N: usize>(
     for (e, v) in x.iter_mut().zip(b.iter()) {
         *e = *v;
     }
-    for k in 0..N {
-        let p = pivot(&m, k, N)?;
-        if p != k {
-            swap(&mut m, k, p);
-            swap(&mut x, k, p);
-        }
-        let (top, rest) = m.split_at_mut_checked(k + 1)?;
-        let (xtop, xrest) = x.split_at_mut_checked(k + 1)?;
-        let (prow, xk) = (top.last()?, *xtop.last()?);
-        let piv = *prow.get(k)?;
-        for (row, xr) in rest.iter_mut().zip(xrest.iter_mut()) {
-            let f = *row.get(k)? / piv;
-            if f == T::zero() {
-                continue;
-            }
-            for (e, pk) in row.get_mut(k..)?.iter_mut().zip(prow.get(k..)?) {
-                *e -= f * *pk;
-            }
-            *xr -= f * xk;
-        }
-    }
-    for k in (0..N).rev() {
-        let row = m.get(k)?;
-        let mut s = *x.get(k)?;
-        for (e, xc) in row.get(k + 1..)?.iter().zip(x.get(k + 1..)?) {
-            s -= *e * *xc;
-        }
-        *x.get_mut(k)? = s / *row.get(k)?;
-    }
-    Some(SVector::from(x))
+    solve_in_place(&mut m, &mut x).then(|| SVector::from(x))
 }
 
-/// Swaps entries `k < p` of `s` (rows of a row-major matrix, or of a vector); nothing
-/// if either is out of range (no panic path: slice `swap` asserts its indices).
-fn swap_entries<X>(s: &mut [X], k: usize, p: usize) {
-    if let Some((lo, hi)) = s.split_at_mut_checked(p) {
-        if let (Some(x), Some(y)) = (lo.get_mut(k), hi.first_mut()) {
-            core::mem::swap(x, y);
-        }
+/// Solves `A x = b` (`a` row-major) in place, `x` into `b` (`a` into its LU factors):
+/// [`solve`] on plain arrays. `false` if a pivot vanishes or is not finite.
+pub fn solve_in_place<T: Real, const N: usize>(a: &mut [[T; N]; N], b: &mut [T; N]) -> bool {
+    let mut piv = [0u8; N];
+    if factor(a, &mut piv).is_none() {
+        return false;
     }
+    lu_solve::<T, N, N>(a, &piv, b);
+    true
 }
 
 /// LU factorisation with partial pivoting (Doolittle) of `a` (row-major), in place:
@@ -101,12 +58,18 @@ fn swap_entries<X>(s: &mut [X], k: usize, p: usize) {
 /// `U` on and above it, the rows in pivot order; `piv[k]` is the row swapped with row
 /// `k` at step `k` (`k` itself for none). Rows whose entry in the pivot column is zero
 /// are left alone (a group's sparse Jacobian costs little more than its fill-in).
-/// Returns the determinant, or `None` if a pivot vanishes or is not finite (`a` and
-/// `piv` are then partly overwritten). Bounded work: `N³/3` multiply-adds at most, no
+/// Returns the determinant, or `None` if a pivot vanishes or is not finite or the
+/// determinant overflows (`a` and `piv` are then partly overwritten). Bounded work: `N³/3` multiply-adds at most, no
 /// iteration; the size is a constant, so the loops unroll (a group's `W`, `N` ≤ 6).
 /// With [`lu_solve`] (`N²` per right-hand side, as a product by the inverse) it
 /// replaces an inverse (`N³`) where a matrix serves a few solves.
 pub fn lu<T: Real, const N: usize>(a: &mut [[T; N]; N], piv: &mut [u8; N]) -> Option<T> {
+    factor(a, piv).filter(|det| det.finite())
+}
+
+/// [`lu`] whatever its determinant: `None` only if a pivot vanishes or is not finite
+/// (a solve needs no finite determinant).
+fn factor<T: Real, const N: usize>(a: &mut [[T; N]; N], piv: &mut [u8; N]) -> Option<T> {
     let mut det = T::one();
     for k in 0..N {
         let mut p = k;
@@ -142,7 +105,7 @@ pub fn lu<T: Real, const N: usize>(a: &mut [[T; N]; N], piv: &mut [u8; N]) -> Op
             }
         }
     }
-    det.finite().then_some(det)
+    Some(det)
 }
 
 /// Solves `A x = b`, `x` into `b`, from the factors [`lu`] made of the top-left
@@ -192,76 +155,4 @@ pub fn lu_substitute<T: Real, const N: usize, const M: usize>(lu: &[[T; M]; M], 
             *e = s / *d;
         }
     }
-}
-
-/// Solves the top-left `n × n` block of `A x = b` (`a` row-major, `n ≤ N`) in place,
-/// `x` into `b`, by Gaussian elimination with partial pivoting: the same elimination as
-/// [`solve`], on plain arrays walked by iterators (no per-entry index checks), and
-/// rows whose entry in the pivot column is zero are left alone, so a sparse system
-/// (a group's reduced equilibrium: each row sees one or two joints) costs little more
-/// than its fill-in. `false` if a pivot vanishes or is not finite. Bounded work:
-/// `n³/3` multiply-adds at most, no iteration.
-pub fn solve_rows<T: Real, const N: usize>(a: &mut [[T; N]; N], b: &mut [T; N], n: usize) -> bool {
-    let n = n.min(N);
-    for k in 0..n {
-        let mut p = k;
-        let mut best = T::zero();
-        for (r, row) in (k..).zip(a.get(k..n).unwrap_or(&[])) {
-            let v = row.get(k).map_or(T::zero(), |v| v.abs());
-            if v > best {
-                best = v;
-                p = r;
-            }
-        }
-        if !(best > T::zero() && best.finite()) {
-            return false;
-        }
-        if p != k {
-            swap_entries(a, k, p);
-            swap_entries(b, k, p);
-        }
-        let (Some((head, tail)), Some((bh, bt))) =
-            (a.split_at_mut_checked(k + 1), b.split_at_mut_checked(k + 1))
-        else {
-            return false;
-        };
-        let (Some(prow), Some(bk)) = (head.last(), bh.last()) else {
-            return false;
-        };
-        let (Some(piv), Some(right)) = (prow.get(k).copied(), prow.get(k + 1..n)) else {
-            return false;
-        };
-        let rows = tail.get_mut(..n - k - 1).unwrap_or(&mut []);
-        for (row, br) in rows.iter_mut().zip(bt.iter_mut()) {
-            let Some(rk) = row.get(k).copied().filter(|v| *v != T::zero()) else {
-                continue;
-            };
-            let f = rk / piv;
-            // Column k itself is not read again: only the columns right of it.
-            for (x, y) in row
-                .get_mut(k + 1..n)
-                .unwrap_or(&mut [])
-                .iter_mut()
-                .zip(right)
-            {
-                *x -= f * *y;
-            }
-            *br -= f * *bk;
-        }
-    }
-    for k in (0..n).rev() {
-        let (Some(row), Some((bh, bt))) = (a.get(k), b.split_at_mut_checked(k + 1)) else {
-            return false;
-        };
-        let (Some(bk), Some(d), Some(right)) = (bh.last_mut(), row.get(k), row.get(k + 1..n))
-        else {
-            return false;
-        };
-        let mut s = *bk;
-        for (x, v) in right.iter().zip(bt.iter()) {
-            s -= *x * *v;
-        }
-        *bk = s / *d;
-    }
-    true
 }

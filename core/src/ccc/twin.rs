@@ -22,6 +22,7 @@ use crate::error::{GroupFault, GroupId, ModelError, StepError};
 use crate::integrator::Dp5;
 use crate::kinetostatics::reactions;
 use crate::scalar::{unit, Real, Vec2};
+use crate::structomat::GroupData;
 use core::fmt;
 use nalgebra::{SMatrix, SVector};
 
@@ -902,22 +903,20 @@ impl<T: Real> Twin<T> {
     }
 
     fn group_unknowns(&self) -> GroupUnknowns<T> {
-        let ws = &self.slots.cur().ws;
-        core::array::from_fn(|k| {
-            ws.group
-                .get(k)
-                .map_or([T::zero(); crate::config::MAX_GROUP_VARS], |g| g.x)
-        })
+        self.per_group(|g| g.x)
     }
 
     fn group_trig(&self) -> GroupTrig<T> {
+        self.per_group(|g| g.trig)
+    }
+
+    /// `field` of each group's data in the current slot's workspace.
+    fn per_group<X: Default>(
+        &self,
+        field: impl Fn(&GroupData<T>) -> X,
+    ) -> [X; crate::config::MAX_GROUPS] {
         let ws = &self.slots.cur().ws;
-        core::array::from_fn(|k| {
-            ws.group.get(k).map_or(
-                [Vec2::new(T::one(), T::zero()); crate::config::MAX_GROUP_VARS],
-                |g| g.trig,
-            )
-        })
+        core::array::from_fn(|k| ws.group.get(k).map_or_else(X::default, &field))
     }
 
     /// Sets the groups' unknowns `x` and, if given, their cosines and sines (those of
@@ -1513,7 +1512,8 @@ impl<T: Real> Twin<T> {
 
     /// Builds mode `m` into the candidate slot at `pose` with the projected speeds
     /// `u_plus` (reference coordinates), evaluates it and returns how far it violates
-    /// SPEC 3's consistency conditions (0: consistent).
+    /// SPEC 3's consistency conditions (0: consistent), and the clutch torques it
+    /// took from its screen (`screened`) if they made its kinetostatics unnecessary.
     #[allow(clippy::too_many_arguments)]
     #[inline(never)]
     fn try_candidate(
