@@ -586,12 +586,54 @@ pub(crate) fn place<T: Real>(
         let theta = angle_at(&p.angle, &gd.x, q, bodies, Level::Pos);
         let cs = angle_cs(&p.angle, &gd.trig, q, bodies);
         if let Some(b) = bodies.get_mut(p.link as usize) {
-            b.theta = theta;
-            b.c = cs.x;
-            b.s = cs.y;
-            b.o = anchor - rotate_cs(cs.x, cs.y, &p.local);
+            place_link(b, theta, cs, anchor, &p.local);
         }
     }
+}
+
+/// Places link `b` at angle `theta` (`cs` its cosine and sine) with its point `local`
+/// (link frame) at `anchor`: every group's position pass ends so.
+#[inline]
+pub(crate) fn place_link<T: Real>(
+    b: &mut BodyState<T>,
+    theta: T,
+    cs: Vec2<T>,
+    anchor: Vec2<T>,
+    local: &Vec2<T>,
+) {
+    b.theta = theta;
+    (b.c, b.s) = (cs.x, cs.y);
+    b.o = anchor - rotate_cs(cs.x, cs.y, local);
+}
+
+/// Sets link `b`'s angular speed `omega` and its frame origin's velocity from the
+/// velocity `anchor` of its point `local` (placed by [`place_link`]):
+/// `v_o = v_anchor - ω J r`, `r = R(θ) local`.
+#[inline]
+pub(crate) fn link_velocity<T: Real>(
+    b: &mut BodyState<T>,
+    anchor: Vec2<T>,
+    omega: T,
+    local: &Vec2<T>,
+) {
+    let r = rotate_cs(b.c, b.s, local);
+    b.omega = omega;
+    b.v = anchor - perp(&r) * omega;
+}
+
+/// Sets link `b`'s angular acceleration `alpha` and its frame origin's acceleration
+/// from the acceleration `anchor` of its point `local` (after [`link_velocity`]):
+/// `a_o = a_anchor - α J r + ω² r`.
+#[inline]
+pub(crate) fn link_acceleration<T: Real>(
+    b: &mut BodyState<T>,
+    anchor: Vec2<T>,
+    alpha: T,
+    local: &Vec2<T>,
+) {
+    let r = rotate_cs(b.c, b.s, local);
+    b.alpha = alpha;
+    b.a = anchor - perp(&r) * alpha + r * (b.omega * b.omega);
 }
 
 /// With `gd.x` solved: caches the terms, factors `W` and places the links.
@@ -639,8 +681,8 @@ trait PassLevel<T: Real> {
     /// A placement angle's derivative, the unknowns' being `u`.
     fn angle(&self, a: &Angle<T>, u: &[T], bodies: &[BodyState<T>]) -> T;
     /// Sets a link's rate (or acceleration) from its anchor point's and its angle's;
-    /// `r = R(θ) local` is the link's anchor point from its frame origin.
-    fn set_link(&self, b: &mut BodyState<T>, anchor: Vec2<T>, rate: T, r: Vec2<T>);
+    /// `local` is the anchor point in the link's frame.
+    fn set_link(&self, b: &mut BodyState<T>, anchor: Vec2<T>, rate: T, local: &Vec2<T>);
     /// Where the unknowns' derivatives go in the group's data.
     fn unknowns<'g>(&self, gd: &'g mut GroupData<T>) -> &'g mut [T; MAX_GROUP_VARS];
 }
@@ -670,9 +712,8 @@ impl<T: Real> PassLevel<T> for Vel<'_, T> {
         angle_at(a, u, self.qd, bodies, Level::Vel)
     }
     #[inline]
-    fn set_link(&self, b: &mut BodyState<T>, anchor: Vec2<T>, rate: T, r: Vec2<T>) {
-        b.omega = rate;
-        b.v = anchor - perp(&r) * rate;
+    fn set_link(&self, b: &mut BodyState<T>, anchor: Vec2<T>, rate: T, local: &Vec2<T>) {
+        link_velocity(b, anchor, rate, local);
     }
     #[inline]
     fn unknowns<'g>(&self, gd: &'g mut GroupData<T>) -> &'g mut [T; MAX_GROUP_VARS] {
@@ -706,9 +747,8 @@ impl<T: Real> PassLevel<T> for Acc<'_, T> {
         angle_at(a, u, self.qdd, bodies, Level::Acc)
     }
     #[inline]
-    fn set_link(&self, b: &mut BodyState<T>, anchor: Vec2<T>, rate: T, r: Vec2<T>) {
-        b.alpha = rate;
-        b.a = anchor - perp(&r) * rate + r * (b.omega * b.omega);
+    fn set_link(&self, b: &mut BodyState<T>, anchor: Vec2<T>, rate: T, local: &Vec2<T>) {
+        link_acceleration(b, anchor, rate, local);
     }
     #[inline]
     fn unknowns<'g>(&self, gd: &'g mut GroupData<T>) -> &'g mut [T; MAX_GROUP_VARS] {
@@ -803,8 +843,7 @@ fn linear_pass<T: Real>(
         }
         let rate = level.angle(&p.angle, &u, bodies);
         if let Some(b) = bodies.get_mut(p.link as usize) {
-            let r = rotate_cs(b.c, b.s, &p.local);
-            level.set_link(b, anchor, rate, r);
+            level.set_link(b, anchor, rate, &p.local);
         }
     }
 }

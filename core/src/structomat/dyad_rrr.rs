@@ -4,6 +4,7 @@
 //! unknowns `x = (θa, θb)`, the link-frame angles). Closed form: C is an intersection of
 //! circle(A, la) and circle(B, lb); branch +1 puts C to the left of A→B.
 
+use super::chain::{link_acceleration, link_velocity, place_link};
 use super::{
     chain, guesses, list, point_acc, point_pos, point_vel, Angle, Base, Group, GroupData,
     GroupKind, Joint, JointKind, Placement, PointRef, Term, TermCache,
@@ -11,7 +12,7 @@ use super::{
 use crate::config::MAX_GROUP_VARS;
 use crate::error::{GroupFault, ModelError};
 use crate::model::Model;
-use crate::scalar::{cross, perp, rotate_cs, Real, Vec2};
+use crate::scalar::{cross, perp, Real, Vec2};
 use crate::workspace::BodyState;
 
 /// Dyad RRR.
@@ -223,14 +224,10 @@ pub(crate) fn solve<T: Real>(
         }
     }
     if let Some(s) = bodies.get_mut(pl_a.link as usize) {
-        s.theta = theta_a;
-        (s.c, s.s) = (trig_a.x, trig_a.y);
-        s.o = a - rotate_cs(trig_a.x, trig_a.y, &pl_a.local);
+        place_link(s, theta_a, trig_a, a, &pl_a.local);
     }
     if let Some(s) = bodies.get_mut(pl_b.link as usize) {
-        s.theta = theta_b;
-        (s.c, s.s) = (trig_b.x, trig_b.y);
-        s.o = c - rotate_cs(trig_b.x, trig_b.y, &pl_b.local);
+        place_link(s, theta_b, trig_b, c, &pl_b.local);
     }
     Ok(det)
 }
@@ -270,14 +267,10 @@ pub(crate) fn velocity<T: Real>(
     gd.xd = xd;
     let wa = gd.cache[0][0].w;
     if let Some(s) = bodies.get_mut(pl_a.link as usize) {
-        let r = rotate_cs(s.c, s.s, &pl_a.local);
-        s.omega = wd_a;
-        s.v = va - perp(&r) * wd_a;
+        link_velocity(s, va, wd_a, &pl_a.local);
     }
     if let Some(s) = bodies.get_mut(pl_b.link as usize) {
-        let r = rotate_cs(s.c, s.s, &pl_b.local);
-        s.omega = wd_b;
-        s.v = va + perp(&wa) * wd_a - perp(&r) * wd_b;
+        link_velocity(s, va + perp(&wa) * wd_a, wd_b, &pl_b.local);
     }
 }
 
@@ -304,13 +297,9 @@ pub(crate) fn acceleration<T: Real>(
     xdd[1] = wdd_b;
     gd.xdd = xdd;
     if let Some(s) = bodies.get_mut(pl_a.link as usize) {
-        let r = rotate_cs(s.c, s.s, &pl_a.local);
-        s.alpha = wdd_a;
-        s.a = aa - perp(&r) * wdd_a + r * (s.omega * s.omega);
+        link_acceleration(s, aa, wdd_a, &pl_a.local);
     }
     if let Some(s) = bodies.get_mut(pl_b.link as usize) {
-        let r = rotate_cs(s.c, s.s, &pl_b.local);
-        s.alpha = wdd_b;
-        s.a = aa + perp(&wa) * wdd_a - ca - perp(&r) * wdd_b + r * (s.omega * s.omega);
+        link_acceleration(s, aa + perp(&wa) * wdd_a - ca, wdd_b, &pl_b.local);
     }
 }

@@ -1,7 +1,7 @@
 //! Motor element R (thesis figure 11a): a link turning about a known point; its
 //! absolute angle is a generalized coordinate, `θ = q_j + offset`.
 
-use super::chain::angle_cs;
+use super::chain::{angle_cs, link_acceleration, link_velocity, place_link};
 use super::{
     chain, list, point_acc, point_pos, point_vel, Angle, Base, Group, GroupData, GroupKind, Joint,
     JointKind, Placement, PointRef,
@@ -9,7 +9,7 @@ use super::{
 use crate::config::MAX_GROUP_VARS;
 use crate::error::{GroupFault, ModelError};
 use crate::model::Model;
-use crate::scalar::{perp, rotate_cs, Real};
+use crate::scalar::Real;
 use crate::workspace::BodyState;
 
 /// Motor element R.
@@ -103,9 +103,7 @@ pub(crate) fn position<T: Real>(
     let anchor = point_pos(model, bodies, pivot);
     let cs = angle_cs(&p.angle, &gd.trig, q, bodies);
     if let Some(b) = bodies.get_mut(p.link as usize) {
-        b.theta = get(q, j) + p.angle.offset;
-        (b.c, b.s) = (cs.x, cs.y);
-        b.o = anchor - rotate_cs(cs.x, cs.y, &p.local);
+        place_link(b, get(q, j) + p.angle.offset, cs, anchor, &p.local);
     }
     Ok(T::one())
 }
@@ -125,9 +123,7 @@ pub(crate) fn velocity<T: Real>(
     let anchor = point_vel(model, bodies, pivot);
     let rate = get(qd, j);
     if let Some(b) = bodies.get_mut(p.link as usize) {
-        let r = rotate_cs(b.c, b.s, &p.local);
-        b.omega = rate;
-        b.v = anchor - perp(&r) * rate;
+        link_velocity(b, anchor, rate, &p.local);
     }
 }
 
@@ -146,8 +142,6 @@ pub(crate) fn acceleration<T: Real>(
     let anchor = point_acc(model, bodies, pivot);
     let rate = get(qdd, j);
     if let Some(b) = bodies.get_mut(p.link as usize) {
-        let r = rotate_cs(b.c, b.s, &p.local);
-        b.alpha = rate;
-        b.a = anchor - perp(&r) * rate + r * (b.omega * b.omega);
+        link_acceleration(b, anchor, rate, &p.local);
     }
 }
