@@ -436,9 +436,11 @@ pub struct Twin<T: Real> {
     switches: heapless::Vec<CoordinateSwitch<T>, { MAX_RETRIES + 1 }>,
     candidates: heapless::Vec<(Mode, T), 8>,
     speed_gap: T,
-    /// `c` came from the mode choice's screen, not from the current slot's
-    /// kinetostatics (see [`Twin::try_candidate`]): a state is committed only with
-    /// the latter, which a re-evaluation of it (after a failed step) reproduces.
+    /// `c` came from the mode choice's screen (see [`Twin::try_candidate`]), or is the
+    /// last one's, the kinetostatics deferred at a speed event (see
+    /// [`Twin::finish_step`]), not from the current slot's kinetostatics: a state is
+    /// committed only with the latter, which a re-evaluation of it (after a failed
+    /// step) reproduces.
     c_screened: bool,
 }
 
@@ -800,7 +802,16 @@ impl<T: Real> Twin<T> {
                 }
             }
             let (g0, r0) = (self.guards, self.guard_rates);
-            self.finish_evaluated(w, inputs)?;
+            // Deferring the kinetostatics costs an extra look at the event functions:
+            // only worth it when a speed function is near its crossing (within 4 steps
+            // at its rate at the start).
+            let may_defer = self.settings.clutch
+                && events < MAX_EVENTS_PER_STEP
+                && g0.iter().zip(r0.iter()).any(|(g, r)| match (g, r) {
+                    (Some(g), Some(r)) => *g + T::c(4.0) * h * r.abs() > T::zero(),
+                    _ => false,
+                });
+            self.finish_step(w, inputs, &g0, h, may_defer)?;
             let fired = fired(&g0, &self.guards);
             if fired == 0 || events >= MAX_EVENTS_PER_STEP || !self.settings.clutch {
                 self.last_guards = (fired == 0).then_some((g0, h));
@@ -975,6 +986,68 @@ impl<T: Real> Twin<T> {
         Ok(())
     }
 
+    /// [`Twin::finish_evaluated`] at the end of a DP5 step of length `h` from the event
+    /// functions `g0`, except that with `may_defer` (the step will locate an event
+    /// that fires) the kinetostatics waits when a speed function fired and the torque
+    /// functions cannot have crossed (`torques_can_wait`): the step then goes on from
+    /// the event inside it, and this state, with the clutch torques of the step's
+    /// start (`c_screened`), is dropped. It spared 7-8k instructions of the 12-16k
+    /// kinetostatics of a Newton-group model at S2's slowest event steps. Not
+    /// inlined: inlined into `advance` it raised the f32 step's stack high-water from
+    /// 9.0 to 11.7 KB (`tests/footprint.rs`).
+    #[inline(never)]
+    fn finish_step(
+        &mut self,
+        w: &Work<T>,
+        inputs: &Inputs<T>,
+        g0: &Guards<T>,
+        h: T,
+        may_defer: bool,
+    ) -> Result<(), TwinError> {
+        if !(may_defer && self.torques_can_wait(g0, h)) {
+            return self.finish_evaluated(w, inputs);
+        }
+        let slot = self.slots.cur_mut();
+        finish_accelerations(&slot.model, &mut slot.ws);
+        let links = self.slots.cur().links(&self.params);
+        // The torque functions from the start's clutch torques: as at the start.
+        let g = self.guards_of(self.slots.cur(), &links, &self.c, inputs);
+        let deferred = fired(g0, &g) & SPEED_GUARDS != 0;
+        if !deferred {
+            let slot = self.slots.cur_mut();
+            reactions(&slot.model, &mut slot.ws, w.t.to_f64())
+                .map_err(|e| self.physical_error(e))?;
+        }
+        self.read_links(&links, inputs, deferred.then_some(self.c));
+        Ok(())
+    }
+
+    /// Whether none of the torque functions in `g0` (a release, a breakaway) can cross
+    /// 0 over the next `h`: each is below 0 by more than 16 times its change over
+    /// the last step without an event (`last_guards`), scaled to `h`. A clutch torque
+    /// is a smooth function of the motion (it changes on the time scale of the crank's
+    /// turn, ~10 ms in S2): its rate does not grow 16-fold from one step of 1e-4 s to
+    /// the next, and a jump (an event, new inputs) clears `last_guards`. A mode
+    /// without torque functions (I0) can always wait. Were one to cross anyway, the
+    /// mode choice at the speed event still checks every clutch torque.
+    fn torques_can_wait(&self, g0: &Guards<T>, h: T) -> bool {
+        let k = T::c(16.0);
+        g0.iter().enumerate().all(|(i, g)| {
+            let Some(a) = g else { return true };
+            if SPEED_GUARDS & (1 << i) != 0 {
+                return true;
+            }
+            let Some(b) = self
+                .last_guards
+                .and_then(|(gl, hp)| gl.get(i).copied().flatten().map(|b| (b, hp)))
+                .map(|(b, hp)| (*a - b).abs() * (h / hp))
+            else {
+                return false;
+            };
+            *a + k * b < T::zero()
+        })
+    }
+
     /// The clutch torques and the event functions from the slot's workspace, which
     /// holds a full evaluation (accelerations and kinetostatics; or accelerations and
     /// the clutch torques `c`, from the mode choice's screen). Not inlined: inlined
@@ -983,10 +1056,15 @@ impl<T: Real> Twin<T> {
     #[inline(never)]
     fn read_evaluation(&mut self, inputs: &Inputs<T>, c: Option<[T; 2]>) {
         let links = self.slots.cur().links(&self.params);
+        self.read_links(&links, inputs, c);
+    }
+
+    /// [`Twin::read_evaluation`] with the slot's physical `links` at hand.
+    fn read_links(&mut self, links: &[LinkState<T>; 9], inputs: &Inputs<T>, c: Option<[T; 2]>) {
         self.c_screened = c.is_some();
-        self.c = c.unwrap_or_else(|| self.slots.cur().clutch_torques(&self.params, &links));
-        self.guards = self.guards_of(self.slots.cur(), &links, &self.c, inputs);
-        self.guard_rates = self.guard_rates_of(self.slots.cur(), &links);
+        self.c = c.unwrap_or_else(|| self.slots.cur().clutch_torques(&self.params, links));
+        self.guards = self.guards_of(self.slots.cur(), links, &self.c, inputs);
+        self.guard_rates = self.guard_rates_of(self.slots.cur(), links);
     }
 
     /// The time derivatives of [`Twin::guards_of`]'s speed functions at `slot`'s
@@ -1079,11 +1157,13 @@ impl<T: Real> Twin<T> {
     /// The iteration ends when the bracket is within the tolerance, or sooner when a
     /// point past the crossing is within the tolerance of the secant's crossing through
     /// it and the point before, both `near` the crossing (the secant's error is then
-    /// second order in their distances, ~1e-10 of the tolerance). Near the crossing it
-    /// aims just past it (0.4 tol): from the guess by a Newton step on the
-    /// interpolant's slope, then by that secant. S2's events take 2 evaluations (some
-    /// torque events 3) instead of 2–5: a bracket closed on both sides needs a point
-    /// on each, and the guess is rarely within the tolerance.
+    /// second order in their distances, ~1e-10 of the tolerance), or, for the first
+    /// point, of a Newton step back on the Hermite interpolant's slope. Near the
+    /// crossing it aims just past it: the first point half the tolerance past the
+    /// Hermite root, the next 0.4 tol past the crossing that Newton step or the
+    /// secant places. 11 of S2's 19 speed events take 1 evaluation, the others 2
+    /// (some torque events 3), instead of 2–5: a bracket closed on both sides needs a
+    /// point on each, and the guess is rarely within the tolerance.
     ///
     /// Not inlined, nor is [`Twin::try_candidate`]: with both inlined the f64 step's
     /// stack high-water was 20.6 KB instead of 16.7 KB (`tests/footprint.rs`).
@@ -1151,7 +1231,23 @@ impl<T: Real> Twin<T> {
         // the interpolant's slope at the guess, for the estimates below.
         let mut last: Option<(T, T)> = None;
         let mut slope = guess.map(|(_, s)| s);
-        let mut guess = guess.map(|(th, _)| th);
+        // The Hermite interpolant's slope where it is trusted to place the crossing
+        // from one point past it: positive and within a factor 2 of the slope of the
+        // chord over the step (a crossing far from linear is left to the secant).
+        let chord = ghi - glo;
+        let trusted =
+            slope.filter(|s| speeds_only && *s >= chord * T::c(0.5) && *s <= chord * T::c(2.0));
+        // The first point aims half the tolerance past the Hermite root: the cubic's
+        // root is off the crossing by ~tol in S2 (under 0.7 tol for 11 of its 18 speed
+        // events), so about half of them land past the crossing within the tolerance
+        // and are located by the one evaluation (see `trusted` below).
+        let mut guess = guess.map(|(th, _)| {
+            if trusted.is_some() {
+                th + tol * T::c(0.5)
+            } else {
+                th
+            }
+        });
         for _ in 0..MAX_LOCATE_ITER {
             if hi - lo <= tol {
                 break;
@@ -1209,11 +1305,19 @@ impl<T: Real> Twin<T> {
             let (g, k) = pick(&self.guards);
             at_hi = g > T::zero();
             // The secant of this point and the last one, if they are `near`: the
-            // crossing to ~near² (the curvature term), far below `tol`.
-            let crossing = last
-                .filter(|(tp, _)| (th - *tp).abs() <= near)
-                .map(|(tp, gp)| th - g * (th - tp) / (g - gp))
-                .filter(|r| r.finite());
+            // crossing to ~near² (the curvature term), far below `tol`. The first
+            // point, `near` the Hermite root, takes the interpolant's trusted slope
+            // instead: a Newton step from it places the crossing to ~(g/s)² |g''/g'|
+            // plus (g/s) times the slope's relative error (S2's second points landed
+            // on the crossing this step predicts to 1e-13 of the step).
+            let crossing = match (last, trusted) {
+                (Some((tp, gp)), _) => Some((tp, gp))
+                    .filter(|(tp, _)| (th - *tp).abs() <= near)
+                    .map(|(tp, gp)| th - g * (th - tp) / (g - gp)),
+                (None, Some(s)) => Some(th - g / s),
+                (None, None) => None,
+            }
+            .filter(|r| r.finite());
             last = Some((th, g));
             if at_hi {
                 hi = th;
@@ -2290,7 +2394,7 @@ fn quadratic_root<T: Real>(gm: T, r: T, g0: T, g1: T, tol: T) -> Option<(T, T)> 
 /// The root in (0, 1) of an interpolant `p` (value, slope) of an event function with
 /// `p(0) = g0 ≤ 0 < p(1) = g1`, to `tol`/100: safeguarded Newton from the linear
 /// root (bisection whenever Newton leaves the bracket; at most 40 iterations, usually
-/// 3). `None` if the values do not bracket a root.
+/// 3), until a Newton step or the bracket is under `tol`/100. `None` if the values do not bracket a root.
 fn bracketed_root<T: Real>(p: impl Fn(T) -> (T, T), g0: T, g1: T, tol: T) -> Option<(T, T)> {
     if !(g0 <= T::zero() && g1 > T::zero()) {
         return None;
@@ -2305,6 +2409,12 @@ fn bracketed_root<T: Real>(p: impl Fn(T) -> (T, T), g0: T, g1: T, tol: T) -> Opt
             a = th;
         }
         let newton = th - v / dv;
+        // Converged: a last Newton step this small may round onto an end of the
+        // bracket, and bisecting from there took 20 more iterations.
+        if newton.finite() && (newton - th).abs() <= tol * T::c(0.01) {
+            th = newton.max(a).min(b);
+            break;
+        }
         let next = if newton.finite() && newton > a && newton < b {
             newton
         } else {
