@@ -442,6 +442,10 @@ pub struct Twin<T: Real> {
     /// committed only with the latter, which a re-evaluation of it (after a failed
     /// step) reproduces.
     c_screened: bool,
+    /// The last candidate [`Twin::try_candidate`] judged is the reference model itself
+    /// (I0, evaluated at the candidate's state), not the scratch slot: taking it swaps
+    /// the two.
+    cand_in_reference: bool,
 }
 
 /// Each group's unknowns, as a step found them.
@@ -549,6 +553,7 @@ impl<T: Real> Twin<T> {
             candidates: heapless::Vec::new(),
             speed_gap: T::zero(),
             c_screened: false,
+            cand_in_reference: false,
         };
         for (p, l) in twin.links.iter_mut().enumerate() {
             l.theta = pose[p];
@@ -1556,7 +1561,14 @@ impl<T: Real> Twin<T> {
         if m.shaft_turning() && with_shaft && m.clutches().iter().all(|c| *c == Clutch::Free) {
             return Err(TwinError::Coasting { time });
         }
-        // The candidate slot holds the chosen mode, evaluated: take it.
+        // The candidate slot holds the chosen mode, evaluated: take it. If that was the
+        // reference model, it becomes the scratch slot first (a swap, ~4k
+        // instructions in f64), and the scratch's model is the reference's until the
+        // next event repositions or rebuilds it.
+        if self.cand_in_reference {
+            let (backup, cand) = self.slots.spares();
+            core::mem::swap(&mut self.reference, if w.switched { cand } else { backup });
+        }
         self.take_candidate(w);
         w.chosen = true;
         w.y = self.cand_state(w);
@@ -1675,46 +1687,58 @@ impl<T: Real> Twin<T> {
             .filter(|c| !dead(**c))
             .chain(choices.iter().filter(|c| dead(**c)))
             .copied();
-        for coords in ordered {
-            if chosen.is_some() && dead(coords) {
-                break;
-            }
-            let second = two && kept == Some(false);
-            if !self.load_candidate(w, m, coords, pose, &omega, inputs, scale_w, second) {
-                if !two {
+        // The reference model (screened: its evaluation succeeded) may be the pick
+        // itself, the first choice of its mode, evaluated at the candidate's state.
+        let first = choices
+            .iter()
+            .copied()
+            .find(|c| !dead(*c))
+            .or(choices.first().copied());
+        let in_reference =
+            screened.is_some() && self.reference_is_candidate(w, m, first, &omega, scale_w);
+        self.cand_in_reference = in_reference;
+        let ok = in_reference || {
+            for coords in ordered {
+                if chosen.is_some() && dead(coords) {
+                    break;
+                }
+                let second = two && kept == Some(false);
+                if !self.load_candidate(w, m, coords, pose, &omega, inputs, scale_w, second) {
+                    if !two {
+                        kept = None;
+                    }
+                    continue;
+                }
+                let cond = self.build_slot(w.switched, second).0.conditioning();
+                if chosen.is_none_or(|(c, _, _)| cond > c * T::c(1.5)) {
+                    chosen = Some((cond, coords, self.speed_gap));
+                    kept = Some(second);
+                } else if !two {
                     kept = None;
                 }
-                continue;
-            }
-            let cond = self.build_slot(w.switched, second).0.conditioning();
-            if chosen.is_none_or(|(c, _, _)| cond > c * T::c(1.5)) {
-                chosen = Some((cond, coords, self.speed_gap));
-                kept = Some(second);
-            } else if !two {
-                kept = None;
-            }
-            if chosen.is_some_and(|(c, _, _)| c >= self.settings.switch_below) {
-                break;
-            }
-        }
-        let ok = match (chosen, kept) {
-            (Some((_, _, gap)), Some(second)) => {
-                self.speed_gap = gap;
-                if second {
-                    // The candidate slot becomes the scratch, where `take_candidate`
-                    // takes the pick from (the other slot, free, becomes the candidate
-                    // slot): a flip of roles, no copy.
-                    self.slots.role.swap(1, 2);
+                if chosen.is_some_and(|(c, _, _)| c >= self.settings.switch_below) {
+                    break;
                 }
-                true
             }
-            (Some((_, coords, gap)), None) => {
-                self.speed_gap = gap;
-                // Overwritten by a later choice in the one free slot: built again at
-                // the scan's pose and speeds.
-                self.load_candidate(w, m, coords, pose, &omega, inputs, scale_w, false)
+            match (chosen, kept) {
+                (Some((_, _, gap)), Some(second)) => {
+                    self.speed_gap = gap;
+                    if second {
+                        // The candidate slot becomes the scratch, where `take_candidate`
+                        // takes the pick from (the other slot, free, becomes the candidate
+                        // slot): a flip of roles, no copy.
+                        self.slots.role.swap(1, 2);
+                    }
+                    true
+                }
+                (Some((_, coords, gap)), None) => {
+                    self.speed_gap = gap;
+                    // Overwritten by a later choice in the one free slot: built again at
+                    // the scan's pose and speeds.
+                    self.load_candidate(w, m, coords, pose, &omega, inputs, scale_w, false)
+                }
+                (None, _) => false,
             }
-            (None, _) => false,
         };
         // The kinetostatics (the clutch torques) of the choice taken only, and not
         // even of it when the screen's clutch torques are clear of the conditions'
@@ -1722,7 +1746,11 @@ impl<T: Real> Twin<T> {
         // differ by rounding), and the screen's torques stand for the model's until
         // the next full evaluation (8.3k instructions of S2's worst event step).
         let clear = screened.filter(|c| torques_clear(m, c, inputs));
-        let (cand, params) = self.scratch(w.switched);
+        let (cand, params) = if in_reference {
+            (&mut self.reference, &self.params)
+        } else {
+            self.scratch(w.switched)
+        };
         let ok = ok && {
             finish_accelerations(&cand.model, &mut cand.ws);
             clear.is_some() || reactions(&cand.model, &mut cand.ws, w.t.to_f64()).is_ok()
@@ -1739,6 +1767,54 @@ impl<T: Real> Twin<T> {
             links[8].alpha,
         );
         Ok((self.violation(m, from, &c, &links, inputs, tol_w), clear))
+    }
+
+    /// Whether the reference model is candidate `m` as [`Twin::try_candidate`] would
+    /// build it: the same mode (I0) in `first`, the coordinate choice it tries first,
+    /// conditioned at least `switch_below` (so the choice it would take) and evaluated
+    /// exactly at the candidate's state (the coordinates at the pose, both models'
+    /// `coordinates_at`, and the speeds `omega` of the coordinates' links, bit for
+    /// bit), which it carries (its speed gap, stored as a built choice's, within the
+    /// tolerance). Its evaluation is then the one a build would make: a dyads-only
+    /// model at the same pose gives the same bits. At S2's shaft stops and releases
+    /// into I0 this spares the build and evaluation of the candidate (~25k
+    /// instructions) for a swap of the two slots ([`Twin::choose`]).
+    fn reference_is_candidate(
+        &mut self,
+        w: &Work<T>,
+        m: Mode,
+        first: Option<Coordinates>,
+        omega: &[T; 9],
+        scale_w: T,
+    ) -> bool {
+        let r = &self.reference;
+        if !(r.built
+            && r.mode == m
+            && Some(r.coords) == first
+            && r.conditioning() >= self.settings.switch_below)
+        {
+            return false;
+        }
+        let q = [r.ws.q[0], r.ws.q[1]];
+        let mut y = w.y;
+        load_state(r, &q, omega, &mut y);
+        let n = r.map.dof.min(2);
+        let at_state =
+            r.ws.qd
+                .iter()
+                .zip(y.iter().skip(QD))
+                .take(n)
+                .all(|(a, b)| same_bits(*a, *b));
+        if !at_state {
+            return false;
+        }
+        let mapped = r.links(&self.params);
+        let off = (1..9).fold(T::zero(), |e, p| e.max((mapped[p].omega - omega[p]).abs()));
+        if !(off <= speed_tol::<T>() * scale_w) {
+            return false;
+        }
+        self.speed_gap = off;
+        true
     }
 
     /// How far mode `m` (entered from `from`) with the clutch torques `c` and the
@@ -1823,9 +1899,12 @@ impl<T: Real> Twin<T> {
         // (relative to the largest speed): the bias accelerations, quadratic in the
         // speeds, then differ by 2e-3 of the margin at most. Without an impact (a
         // release, a catch located in time) the projection moves the speeds by rounding.
+        // For the reference's own mode (I0) exactly at them: the reference is then the
+        // candidate itself (see `Twin::reference_is_candidate`).
         let scale = u_plus.iter().fold(T::one(), |a, v| a.max(v.abs()));
         let moved = (0..2).fold(T::zero(), |a, k| a.max((yr[QD + k] - u_plus[k]).abs()));
-        if !(moved <= screen_margin::<T>() * T::c(1e-3) * scale) {
+        let exact = m == self.reference.mode;
+        if !(moved <= screen_margin::<T>() * T::c(1e-3) * scale) || (exact && moved != T::zero()) {
             yr[QD] = u_plus[0];
             yr[QD + 1] = u_plus[1];
             if self.reference.eval(t, yr, inputs, d).is_err() {
