@@ -71,41 +71,67 @@ pub fn lu<T: Real, const N: usize>(a: &mut [[T; N]; N], piv: &mut [u8; N]) -> Op
 /// (a solve needs no finite determinant).
 fn factor<T: Real, const N: usize>(a: &mut [[T; N]; N], piv: &mut [u8; N]) -> Option<T> {
     let mut det = T::one();
-    for k in 0..N {
-        let mut p = k;
-        let mut best = T::zero();
-        for r in k..N {
-            let v = a.get(r)?.get(k)?.abs();
-            if v > best {
-                best = v;
-                p = r;
-            }
-        }
-        if !(best > T::zero() && best.finite()) {
-            return None;
-        }
-        if p != k {
-            swap(a, k, p);
-            det = -det;
-        }
-        *piv.get_mut(k)? = p as u8;
-        let prow = *a.get(k)?;
-        let d = *prow.get(k)?;
-        det *= d;
-        for r in k + 1..N {
-            let row = a.get_mut(r)?;
-            let rk = *row.get(k)?;
-            if rk == T::zero() {
-                continue;
-            }
-            let f = rk / d;
-            *row.get_mut(k)? = f;
-            for c in k + 1..N {
-                *row.get_mut(c)? -= f * *prow.get(c)?;
-            }
-        }
+    // The first steps one call each with a constant `k`: inlined, their loops have
+    // constant bounds and unroll (a group's W, N ≤ 6, is factored in full so, with no
+    // loop overhead); the steps of a larger matrix past them in a loop.
+    elimination_step(a, piv, &mut det, 0)?;
+    elimination_step(a, piv, &mut det, 1)?;
+    elimination_step(a, piv, &mut det, 2)?;
+    elimination_step(a, piv, &mut det, 3)?;
+    elimination_step(a, piv, &mut det, 4)?;
+    elimination_step(a, piv, &mut det, 5)?;
+    for k in 6..N {
+        elimination_step(a, piv, &mut det, k)?;
     }
     Some(det)
+}
+
+/// Step `k` of [`factor`] (nothing if `k ≥ N`): the pivot of column `k` (the largest
+/// magnitude on or below the diagonal) swapped into row `k`, `det` multiplied by it
+/// (and negated by a swap), and its multiples subtracted from the rows below.
+#[inline(always)]
+fn elimination_step<T: Real, const N: usize>(
+    a: &mut [[T; N]; N],
+    piv: &mut [u8; N],
+    det: &mut T,
+    k: usize,
+) -> Option<()> {
+    if k >= N {
+        return Some(());
+    }
+    let mut p = k;
+    let mut best = T::zero();
+    for r in k..N {
+        let v = a.get(r)?.get(k)?.abs();
+        if v > best {
+            best = v;
+            p = r;
+        }
+    }
+    if !(best > T::zero() && best.finite()) {
+        return None;
+    }
+    if p != k {
+        swap(a, k, p);
+        *det = -*det;
+    }
+    *piv.get_mut(k)? = p as u8;
+    let prow = *a.get(k)?;
+    let d = *prow.get(k)?;
+    *det *= d;
+    for r in k + 1..N {
+        let row = a.get_mut(r)?;
+        let rk = *row.get(k)?;
+        if rk == T::zero() {
+            continue;
+        }
+        let f = rk / d;
+        *row.get_mut(k)? = f;
+        for c in k + 1..N {
+            *row.get_mut(c)? -= f * *prow.get(c)?;
+        }
+    }
+    Some(())
 }
 
 /// Solves `A x = b`, `x` into `b`, from the factors [`lu`] made of the top-left

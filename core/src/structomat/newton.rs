@@ -9,7 +9,9 @@
 //! `x(q₀)` to `x(q₀) + C (q - q₀)` plus the second-order term along the rates of that
 //! evaluation, whose error is third order in `q - q₀`.
 
-use super::chain::{chain_gaps, eval_terms, jacobian, position_from_terms, residual};
+use super::chain::{
+    chain_gaps, eval_terms, jacobian, position_from_jacobian, position_from_terms, residual, Arms,
+};
 use super::{Base, Group, GroupData, GroupKind, Term};
 use crate::config::{MAX_DOF, MAX_GROUP_VARS, NEWTON_MAX_ITER};
 use crate::error::GroupFault;
@@ -163,9 +165,18 @@ fn solve_n<T: Real, const N: usize>(
             *at = *x;
         }
     }
+    // An all-arm group (the triad, a general Assur group) evaluates its terms, its
+    // residual and W in one pass; W at the converged iterate is then the one factored.
+    let arms = Arms::of(g);
+    let mut w = [[T::zero(); N]; N];
     for it in 0..NEWTON_MAX_ITER {
-        eval_terms(g, gd, bodies, q);
-        let f = residual(g, gd, &gaps);
+        let f = match &arms {
+            Some(a) => a.eval(gd, &gaps, &mut w),
+            None => {
+                eval_terms(g, gd, bodies, q);
+                residual(g, gd, &gaps)
+            }
+        };
         res = f.amax();
         if !res.finite() {
             return Err(GroupFault::NonFiniteInput);
@@ -173,11 +184,16 @@ fn solve_n<T: Real, const N: usize>(
         if res <= tol && (it > 0 || !predicted) {
             gd.iterations = it;
             // The terms are cached at this `x` (just evaluated for the residual).
-            return position_from_terms(g, gd, model, bodies, q);
+            return match arms {
+                Some(_) => position_from_jacobian(g, gd, model, bodies, q, &w),
+                None => position_from_terms(g, gd, model, bodies, q),
+            };
         }
         // The step solves W dx = f by elimination (`factor` factors W once more, at
         // the solution, for the linear passes).
-        let mut w = jacobian::<T, N>(g, gd);
+        if arms.is_none() {
+            jacobian(g, gd, &mut w);
+        }
         let mut dx = [T::zero(); N];
         for (d, v) in dx.iter_mut().zip(f.iter()) {
             *d = *v;
