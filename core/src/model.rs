@@ -237,31 +237,69 @@ impl<T: Real> Model<T> {
 
     /// Local coordinates of `p`, or an error naming `what`.
     pub fn resolve(&self, p: PointRef, what: &'static str) -> Result<Vec2<T>, ModelError> {
-        let ok = if p.body == 0 {
-            (p.point as usize) < self.ground.len()
-        } else {
-            self.link(p.body)
-                .is_some_and(|l| (p.point as usize) < l.points.len())
-        };
-        if ok {
-            Ok(self.point_local(p))
-        } else {
-            Err(ModelError::UnknownReference(what))
-        }
+        self.points().resolve(p, what)
     }
 
     /// Point `point` of link `body` in its frame, or an error naming `what`.
     pub fn local(&self, body: u8, point: u8, what: &'static str) -> Result<Vec2<T>, ModelError> {
-        if body == 0 {
-            return Err(ModelError::UnknownReference(what));
+        self.points().local(body, point, what)
+    }
+
+    /// The ground's and the links' points, which group constructors resolve.
+    #[inline]
+    pub(crate) fn points(&self) -> Points<'_, T> {
+        Points {
+            ground: &self.ground,
+            links: &self.links,
         }
-        self.resolve(PointRef { body, point }, what)
     }
 
     /// The structomatic formula of the sequence, e.g.
     /// `Z(0) + R(1) + R(2) + RRR(3,4)` (thesis eq. 3.1-3.3).
     pub fn formula(&self) -> Formula<'_, T> {
         Formula(self)
+    }
+}
+
+/// The points of a model's ground and links, borrowed apart from its groups: what a
+/// group constructor resolves while it writes its group into the model
+/// ([`ModelBuilder::group_in_place`]).
+#[derive(Clone, Copy)]
+pub(crate) struct Points<'a, T: Real> {
+    ground: &'a [Vec2<T>],
+    links: &'a [Link<T>],
+}
+
+impl<T: Real> Points<'_, T> {
+    /// See [`Model::resolve`].
+    pub(crate) fn resolve(&self, p: PointRef, what: &'static str) -> Result<Vec2<T>, ModelError> {
+        let point = if p.body == 0 {
+            self.ground.get(p.point as usize)
+        } else {
+            self.link(p.body)
+                .and_then(|l| l.points.get(p.point as usize))
+        };
+        point.copied().ok_or(ModelError::UnknownReference(what))
+    }
+
+    /// See [`Model::local`].
+    pub(crate) fn local(
+        &self,
+        body: u8,
+        point: u8,
+        what: &'static str,
+    ) -> Result<Vec2<T>, ModelError> {
+        if body == 0 {
+            return Err(ModelError::UnknownReference(what));
+        }
+        self.resolve(PointRef { body, point }, what)
+    }
+
+    #[inline]
+    fn link(&self, body: u8) -> Option<&Link<T>> {
+        (body as usize)
+            .checked_sub(1)
+            .and_then(|k| self.links.get(k))
     }
 }
 
@@ -282,6 +320,15 @@ impl<T: Real> fmt::Display for Formula<'_, T> {
 pub trait GroupSpec<T: Real> {
     /// Builds the group, resolving its points in `model`.
     fn build(&self, model: &Model<T>) -> Result<Group<T>, ModelError>;
+}
+
+/// A group constructor that writes its group in place, into an empty group of the
+/// model's sequence ([`ModelBuilder::group_in_place`]): no group value (2 KB in f64) is
+/// built apart and moved. Its [`GroupSpec::build`] writes into a new group the same way.
+pub(crate) trait WriteGroup<T: Real>: GroupSpec<T> {
+    /// Fills `g`, an empty group ([`Group::empty`]), resolving points in `points`; on
+    /// an error `g` is partly written.
+    fn write(&self, points: &Points<'_, T>, g: &mut Group<T>) -> Result<(), ModelError>;
 }
 
 macro_rules! group_spec {
@@ -397,6 +444,16 @@ impl<'a, T: Real> ModelBuilder<T, &'a mut Model<T>> {
     pub fn finish(self) -> Result<(), ModelError> {
         validate(self.m)
     }
+
+    /// [`ModelBuilder::finish`] for a model whose sequence of `dof` coordinates is
+    /// known to be valid and whose groups were written by the crate's constructors of
+    /// the motor element R, the dyad RRR, the triad and the Assur group from points
+    /// only (their angle offsets zero): the converter's modes, rebuilt at each event,
+    /// whose every declaration the full validation passes in the tests. It skips what
+    /// only a wrong declaration could fail (see `validate_rebuilt`).
+    pub(crate) fn finish_rebuilt(self, dof: u8) -> Result<(), ModelError> {
+        validate_rebuilt(self.m, dof)
+    }
 }
 
 impl<T: Real, M: DerefMut<Target = Model<T>>> ModelBuilder<T, M> {
@@ -451,6 +508,34 @@ impl<T: Real, M: DerefMut<Target = Model<T>>> ModelBuilder<T, M> {
         Ok((self.m.groups.len() - 1) as u8)
     }
 
+    /// [`ModelBuilder::group`] for the constructors that write their group in place:
+    /// the same group and errors, but the group is written into the sequence, not built
+    /// apart and moved there.
+    pub(crate) fn group_in_place(&mut self, spec: &impl WriteGroup<T>) -> Result<u8, ModelError> {
+        let Model {
+            ground,
+            links,
+            groups,
+            ..
+        } = &mut *self.m;
+        if groups.is_full() {
+            // The constructor's own errors come first, as in `group`.
+            spec.build(&self.m)?;
+            return Err(ModelError::Capacity("groups"));
+        }
+        let points = Points { ground, links };
+        let _ = groups.push(Group::empty());
+        let written = match groups.last_mut() {
+            Some(g) => spec.write(&points, g),
+            None => Err(ModelError::Capacity("groups")),
+        };
+        if let Err(e) = written {
+            groups.pop();
+            return Err(e);
+        }
+        Ok((groups.len() - 1) as u8)
+    }
+
     /// Puts a motor on coordinate `coord` (applied by its first motor element).
     pub fn drive(&mut self, coord: u8, motor: Motor<T>) -> Result<&mut Self, ModelError> {
         self.m
@@ -478,6 +563,49 @@ impl<T: Real, M: DerefMut<Target = Model<T>>> ModelBuilder<T, M> {
 /// drives' motor elements): the end of [`ModelBuilder::build`] and
 /// [`ModelBuilder::finish`].
 fn validate<T: Real>(m: &mut Model<T>) -> Result<(), ModelError> {
+    let size = validate_bodies(m)?;
+    // After the points: a group's values derive from them, and a non-finite point
+    // is named as such above.
+    for (k, g) in m.groups.iter().enumerate() {
+        if let Err(what) = group_values_finite(g) {
+            return Err(ModelError::GroupNonFinite {
+                group: k as u8,
+                kind: g.kind,
+                what,
+            });
+        }
+    }
+    check_sequence(m)?;
+    validate_drives_and_loads(m, size)
+}
+
+/// [`validate`] for a model rebuilt in place whose sequence is known to be valid and
+/// whose group constructors are known to derive their values from its points only,
+/// apart from the guesses (the converter's modes, [`ModelBuilder::finish_rebuilt`]):
+/// the same checks of the links, ground points, guesses, drives and loads, the same
+/// Newton tolerance, but no walk of the sequence and of the groups' derived values,
+/// which a finite mechanism of finite size squared keeps finite (differences of its
+/// points, their lengths, directions and angles). `dof` is the number of coordinates
+/// the sequence drives.
+fn validate_rebuilt<T: Real>(m: &mut Model<T>, dof: u8) -> Result<(), ModelError> {
+    let size = validate_bodies(m)?;
+    for (k, g) in m.groups.iter().enumerate() {
+        if !g.guess.iter().all(|x| x.finite()) {
+            return Err(ModelError::GroupNonFinite {
+                group: k as u8,
+                kind: g.kind,
+                what: "a guess",
+            });
+        }
+    }
+    m.dof = dof;
+    validate_drives_and_loads(m, size)
+}
+
+/// The first part of [`validate`]: gravity, the singularity threshold, the ground
+/// points and the links, and the Newton tolerance from the mechanism's scale; returns
+/// the mechanism's size (twice its largest coordinate, m).
+fn validate_bodies<T: Real>(m: &mut Model<T>) -> Result<T, ModelError> {
     if !(m.gravity.x.finite() && m.gravity.y.finite()) {
         return Err(ModelError::NonFinite("gravity"));
     }
@@ -529,17 +657,6 @@ fn validate<T: Real>(m: &mut Model<T>) -> Result<(), ModelError> {
             ));
         }
     }
-    // After the points: a group's values derive from them, and a non-finite point
-    // is named as such above.
-    for (k, g) in m.groups.iter().enumerate() {
-        if let Err(what) = group_values_finite(g) {
-            return Err(ModelError::GroupNonFinite {
-                group: k as u8,
-                kind: g.kind,
-                what,
-            });
-        }
-    }
     // Newton stops at 64 ulps of the mechanism's size in f64 (1.4e-14 m per metre)
     // and at 8 ulps in f32 (9.5e-7 m per metre). f32's 64 ulps, 7.6e-6 m per metre,
     // left the joints of a triad or of A68's six-link group that far apart, and that
@@ -547,7 +664,12 @@ fn validate<T: Real>(m: &mut Model<T>) -> Result<(), ModelError> {
     // too). f32's residual gets under 1 ulp; 8 still takes at most one iteration a
     // solve in S2, as 64 did.
     m.newton_tol = T::c(64.0 * f64::EPSILON).max(T::c(8.0) * T::EPS) * scale;
-    check_sequence(m)?;
+    Ok(size)
+}
+
+/// The last part of [`validate`], after the sequence: each drive's motor element and
+/// motor law, each load's body and values (`size`: the mechanism's, m).
+fn validate_drives_and_loads<T: Real>(m: &mut Model<T>, size: T) -> Result<(), ModelError> {
     let Model {
         drives,
         groups,

@@ -110,7 +110,10 @@ pub(crate) fn build<T: Real>(
 }
 
 /// [`build`] into `model`, in place (the twin's step path: no model on the stack). On
-/// an error `model` is half-built.
+/// an error `model` is half-built. The declaration of each mode and coordinate choice
+/// passes the full validation (the tests build them all with [`build`]), so only what
+/// the pose and the parameters can make invalid is checked again
+/// ([`ModelBuilder::finish_rebuilt`]): the same model, the same errors.
 pub(crate) fn build_into<T: Real>(
     p: &CccParams<T>,
     mode: Mode,
@@ -120,7 +123,7 @@ pub(crate) fn build_into<T: Real>(
 ) -> Result<BodyMap<T>, ModelError> {
     let mut b = ModelBuilder::in_place(model);
     let map = declare(&mut b, p, mode, coords, pose)?;
-    b.finish()?;
+    b.finish_rebuilt(map.dof as u8)?;
     Ok(map)
 }
 
@@ -210,7 +213,7 @@ fn declare<T: Real, M: DerefMut<Target = Model<T>>>(
                  link_point: u8,
                  coord: u8|
      -> Result<(), ModelError> {
-        b.group(&MotorR {
+        b.group_in_place(&MotorR {
             link: body(link),
             pivot,
             link_point,
@@ -225,7 +228,7 @@ fn declare<T: Real, M: DerefMut<Target = Model<T>>>(
                (la, pa, a_at, a_j): (usize, PointRef, u8, u8),
                (lb, pb, b_at, b_j): (usize, PointRef, u8, u8)|
      -> Result<(), ModelError> {
-        b.group(&DyadRrr {
+        b.group_in_place(&DyadRrr {
             a: body(la),
             b: body(lb),
             pole_a: pa,
@@ -311,7 +314,7 @@ fn declare<T: Real, M: DerefMut<Target = Model<T>>>(
                 at,
                 other,
             };
-            b.group(&AssurGroup {
+            b.group_in_place(&AssurGroup {
                 links: &links,
                 loops: &[
                     AssurLoop {
@@ -364,7 +367,7 @@ fn declare<T: Real, M: DerefMut<Target = Model<T>>>(
             match coords {
                 Coordinates::Crank => {
                     motor(b, CRANK, a, P0, 0)?;
-                    b.group(&TriadRrRrRr {
+                    b.group_in_place(&TriadRrRrRr {
                         ternary: body(ROCKER),
                         ternary_joints: [P1, P0, ROCKER_D],
                         binary: [body(COUPLER), body(SWING), body(rod)],
@@ -481,6 +484,7 @@ pub fn initial_pose<T: Real>(p: &CccParams<T>, crank: T, swing: T) -> Option<[T;
 
 #[cfg(test)]
 mod tests {
+    extern crate std;
     use super::*;
 
     /// [`driving_link`] names the link each one-coordinate model is built on.
@@ -501,5 +505,49 @@ mod tests {
         }
         // I6, I8: crank, swing, rod; A68: lever, crank.
         assert_eq!(checked, 8);
+    }
+
+    /// [`build_into`]'s shorter validation gives the model of [`build`], which passes
+    /// the full one, for every mode and coordinate choice, over a spread of poses
+    /// (locked pins and A68's lever offset move with them), and fails as it does at a
+    /// pose with a non-finite angle.
+    #[test]
+    fn build_into_is_build() {
+        let p = CccParams::<f64>::reference();
+        let mut model = crate::model::ModelBuilder::new().model().clone();
+        let mut poses = std::vec::Vec::new();
+        for (crank, swing) in [(0.3, 1.9), (2.0, 1.7), (-1.1, 2.1), (4.0, 1.8)] {
+            poses.extend(initial_pose(&p, crank, swing));
+        }
+        let first = poses[0];
+        for k in 1..=8 {
+            for bad in [f64::NAN, f64::INFINITY] {
+                let mut pose = first;
+                pose[k] = bad;
+                poses.push(pose);
+            }
+        }
+        let (mut built, mut failed) = (0, 0);
+        for pose in poses {
+            for mode in Mode::ALL {
+                for coords in mode.coordinate_choices().iter().copied() {
+                    let full = build(&p, mode, coords, &pose);
+                    let into = build_into(&p, mode, coords, &pose, &mut model);
+                    let (Ok((m, map)), Ok(map_into)) = (&full, &into) else {
+                        assert_eq!(full.err(), into.err(), "{mode} {coords}");
+                        failed += 1;
+                        continue;
+                    };
+                    assert_eq!(map, map_into, "{mode} {coords}");
+                    assert_eq!(m.dof(), model.dof(), "{mode} {coords}");
+                    assert_eq!(m.newton_tol(), model.newton_tol(), "{mode} {coords}");
+                    assert_eq!(m.groups(), model.groups(), "{mode} {coords}");
+                    assert_eq!(m.links(), model.links(), "{mode} {coords}");
+                    assert_eq!(m.ground_points(), model.ground_points(), "{mode} {coords}");
+                    built += 1;
+                }
+            }
+        }
+        assert!(built >= 20 && failed >= 20, "{built} {failed}");
     }
 }

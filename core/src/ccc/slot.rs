@@ -157,7 +157,8 @@ impl<T: Real> Slot<T> {
         pose: &[T; 9],
         time: f64,
     ) -> Result<[T; 2], StepError> {
-        if self.built && self.mode == mode && self.coords == coords {
+        // The declared parts first: they need no position pass.
+        if self.built && self.mode == mode && self.coords == coords && self.declares(pose) {
             let q = self.map.coordinates_at(pose);
             let placed = position(
                 &self.model,
@@ -166,7 +167,7 @@ impl<T: Real> Slot<T> {
                 time,
             )
             .is_ok();
-            if placed && self.matches(params, pose) {
+            if placed && self.placed_at(params, pose) {
                 return Ok(q);
             }
         }
@@ -174,15 +175,13 @@ impl<T: Real> Slot<T> {
     }
 
     /// Whether the slot's model is the one a rebuild at `pose` would declare, up to
-    /// rounding, and its last position pass placed every physical link at its angle in
-    /// `pose` (modulo 2π) to 1e-6 rad (1000 ulps in f32): a wrong branch is off by a
-    /// sizeable angle, rounding by ~1e-13 rad. The state-dependent parts are checked
-    /// to rounding, not to that tolerance: a locked lever's pin was placed at exactly
-    /// its angle in `pose` (a lever locked again near where it locked before is a new
-    /// pin), and A68's lever offset is `pose`'s angle between the levers to 16 ulps.
-    fn matches(&self, params: &CccParams<T>, pose: &[T; 9]) -> bool {
+    /// rounding (its mode and coordinates being the same). The state-dependent parts
+    /// are checked to rounding: a locked lever's pin was placed at exactly its angle in
+    /// `pose` (a lever locked again near where it locked before is a new pin), and
+    /// A68's lever offset is `pose`'s angle between the levers to 16 ulps.
+    fn declares(&self, pose: &[T; 9]) -> bool {
         let th = |p: usize| pose.get(p).copied().unwrap_or(T::zero());
-        let parts_same = BRANCHES.iter().all(|(_, lever)| {
+        BRANCHES.iter().all(|(_, lever)| {
             let off = self.map.offset.get(*lever).copied().unwrap_or(T::zero());
             if self.body(*lever) == 0 {
                 return off == th(*lever);
@@ -195,15 +194,19 @@ impl<T: Real> Slot<T> {
             let between = th(*lever) - th(l6);
             let ulps = T::EPS * T::c(16.0) * (th(*lever).abs() + th(l6).abs() + T::one());
             (off - between).abs() <= ulps
-        });
+        })
+    }
+
+    /// Whether the slot's last position pass placed every physical link at its angle in
+    /// `pose` (modulo 2π) to 1e-6 rad (1000 ulps in f32): a wrong branch is off by a
+    /// sizeable angle, rounding by ~1e-13 rad.
+    fn placed_at(&self, params: &CccParams<T>, pose: &[T; 9]) -> bool {
         let tol = T::c(1e-6).max(T::EPS * T::c(1e3));
-        let links = self.links(params);
-        parts_same
-            && links
-                .iter()
-                .zip(pose.iter())
-                .skip(1)
-                .all(|(l, p)| (l.theta - unwrap_near(*p, l.theta)).abs() <= tol)
+        self.links(params)
+            .iter()
+            .zip(pose.iter())
+            .skip(1)
+            .all(|(l, p)| (l.theta - unwrap_near(*p, l.theta)).abs() <= tol)
     }
 
     /// Assembles the slot's model at the physical angles `pose` from a fresh workspace;

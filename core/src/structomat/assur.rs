@@ -16,12 +16,11 @@
 //! triad.
 
 use super::{
-    guesses, list, Angle, Base, Chain, Group, GroupKind, Joint, JointKind, Placement, PointRef,
-    Term,
+    guesses, Angle, Base, Chain, Group, GroupKind, Joint, JointKind, Placement, PointRef, Term,
 };
-use crate::config::{MAX_CHAINS, MAX_GROUP_JOINTS, MAX_GROUP_LINKS, MAX_TERMS};
+use crate::config::MAX_GROUP_LINKS;
 use crate::error::ModelError;
-use crate::model::{GroupSpec, Model};
+use crate::model::{GroupSpec, Model, Points, WriteGroup};
 use crate::scalar::Real;
 
 /// One step of a loop: link `links[link]` walked from its point `from` to its point
@@ -77,6 +76,15 @@ pub struct AssurGroup<'a, T: Real> {
 impl<T: Real> AssurGroup<'_, T> {
     /// Builds the group's description.
     pub fn build(&self, model: &Model<T>) -> Result<Group<T>, ModelError> {
+        let mut g = Group::empty();
+        self.write(&model.points(), &mut g)?;
+        Ok(g)
+    }
+}
+
+impl<T: Real> WriteGroup<T> for AssurGroup<'_, T> {
+    /// [`AssurGroup::build`], in place.
+    fn write(&self, model: &Points<'_, T>, g: &mut Group<T>) -> Result<(), ModelError> {
         let n = self.links.len();
         if n == 0 || n > MAX_GROUP_LINKS || 2 * self.loops.len() > MAX_GROUP_LINKS {
             return Err(ModelError::Capacity("links of an Assur group"));
@@ -96,12 +104,21 @@ impl<T: Real> AssurGroup<'_, T> {
                 "Assur group: one guess per link is needed",
             ));
         }
-        let mut chains: heapless::Vec<Chain<T>, MAX_CHAINS> = heapless::Vec::new();
         let mut placements: heapless::Vec<Placement<T>, MAX_GROUP_LINKS> = heapless::Vec::new();
         for (ci, lp) in self.loops.iter().enumerate() {
             model.resolve(lp.start, "Assur group: loop start")?;
             model.resolve(lp.end, "Assur group: loop end")?;
-            let mut terms: heapless::Vec<Term<T>, MAX_TERMS> = heapless::Vec::new();
+            g.chains
+                .push(Chain {
+                    start: lp.start,
+                    terms: heapless::Vec::new(),
+                    end: Some(lp.end),
+                })
+                .map_err(|_| ModelError::Capacity("loops of an Assur group"))?;
+            let terms = match g.chains.last_mut() {
+                Some(c) => &mut c.terms,
+                None => return Err(ModelError::Capacity("loops of an Assur group")),
+            };
             for (si, st) in lp.steps.iter().enumerate() {
                 let body = *self
                     .links
@@ -114,7 +131,7 @@ impl<T: Real> AssurGroup<'_, T> {
                         "Assur group: a step's two points coincide",
                     ));
                 }
-                let angle = Angle::new(Base::Var(st.link), T::zero());
+                let angle = Angle::of(Base::Var(st.link));
                 terms
                     .push(Term::Arm {
                         angle,
@@ -133,13 +150,6 @@ impl<T: Real> AssurGroup<'_, T> {
                         .map_err(|_| ModelError::Capacity("links of an Assur group"))?;
                 }
             }
-            chains
-                .push(Chain {
-                    start: lp.start,
-                    terms,
-                    end: Some(lp.end),
-                })
-                .map_err(|_| ModelError::Capacity("loops of an Assur group"))?;
         }
         if placements.len() != n {
             return Err(ModelError::Degenerate(
@@ -147,18 +157,16 @@ impl<T: Real> AssurGroup<'_, T> {
             ));
         }
         // Placements in the order of `links` (the kinetostatics' row order).
-        let mut ordered: heapless::Vec<Placement<T>, MAX_GROUP_LINKS> = heapless::Vec::new();
         for body in self.links {
             if let Some(p) = placements.iter().find(|p| p.link == *body) {
-                let _ = ordered.push(*p);
+                let _ = g.placements.push(*p);
             }
         }
-        let mut joints: heapless::Vec<Joint<T>, MAX_GROUP_JOINTS> = heapless::Vec::new();
         for jt in self.joints {
             if !self.links.contains(&jt.link) {
                 return Err(ModelError::UnknownReference("Assur group: joint link"));
             }
-            joints
+            g.joints
                 .push(Joint {
                     i: jt.link,
                     pi: model.local(jt.link, jt.at, "Assur group: joint point")?,
@@ -168,16 +176,10 @@ impl<T: Real> AssurGroup<'_, T> {
                 })
                 .map_err(|_| ModelError::Capacity("joints of an Assur group"))?;
         }
-        Ok(Group {
-            kind: GroupKind::Assur,
-            n_vars: n as u8,
-            chains,
-            placements: list(&ordered, "placements")?,
-            joints,
-            guess: guesses(self.guess),
-            consts: [T::zero(); 8],
-            coord: None,
-        })
+        g.kind = GroupKind::Assur;
+        g.n_vars = n as u8;
+        g.guess = guesses(self.guess);
+        Ok(())
     }
 }
 

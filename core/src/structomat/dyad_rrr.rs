@@ -6,12 +6,12 @@
 
 use super::chain::{link_acceleration, link_velocity, place_link};
 use super::{
-    chain, guesses, list, point_acc, point_pos, point_vel, Angle, Base, Group, GroupData,
+    extend, guesses, point_acc, point_pos, point_vel, push_chain, Angle, Base, Group, GroupData,
     GroupKind, Joint, JointKind, Placement, PointRef, Term, TermCache,
 };
 use crate::config::MAX_GROUP_VARS;
 use crate::error::{GroupFault, ModelError};
-use crate::model::Model;
+use crate::model::{Model, Points, WriteGroup};
 use crate::scalar::{cross, perp, Real, Vec2};
 use crate::workspace::BodyState;
 
@@ -43,6 +43,15 @@ impl<T: Real> DyadRrr<T> {
     /// `[la, lb, cos ∠va, sin ∠va, cos ∠wb, sin ∠wb, ∠va, ∠wb]` with
     /// `va = C_a - A_a`, `wb = C_b - B_b` in the link frames.
     pub fn build(&self, model: &Model<T>) -> Result<Group<T>, ModelError> {
+        let mut g = Group::empty();
+        self.write(&model.points(), &mut g)?;
+        Ok(g)
+    }
+}
+
+impl<T: Real> WriteGroup<T> for DyadRrr<T> {
+    /// [`DyadRrr::build`], in place.
+    fn write(&self, model: &Points<'_, T>, g: &mut Group<T>) -> Result<(), ModelError> {
         let pa = model.local(self.a, self.a_at_pole, "dyad RRR: a at pole")?;
         let ca = model.local(self.a, self.a_joint, "dyad RRR: a at joint")?;
         let pb = model.local(self.b, self.b_at_pole, "dyad RRR: b at pole")?;
@@ -54,79 +63,83 @@ impl<T: Real> DyadRrr<T> {
         if !(la > T::zero() && lb > T::zero()) {
             return Err(ModelError::Degenerate("dyad RRR: a link's joints coincide"));
         }
-        let ang = |k: u8| Angle::new(Base::Var(k), T::zero());
-        let terms = [
-            Term::Arm {
-                angle: ang(0),
-                v: va,
-            },
-            Term::Arm {
-                angle: ang(1),
-                v: -wb,
-            },
-        ];
-        Ok(Group {
-            kind: GroupKind::Rrr,
-            n_vars: 2,
-            chains: list(&[chain(self.pole_a, &terms, Some(self.pole_b))?], "chains")?,
-            placements: list(
-                &[
-                    Placement {
-                        link: self.a,
-                        angle: ang(0),
-                        chain: 0,
-                        prefix: 0,
-                        local: pa,
-                    },
-                    Placement {
-                        link: self.b,
-                        angle: ang(1),
-                        chain: 0,
-                        prefix: 1,
-                        local: cb,
-                    },
-                ],
-                "placements",
-            )?,
-            joints: list(
-                &[
-                    Joint {
-                        i: self.a,
-                        pi: pa,
-                        j: self.pole_a.body,
-                        pj: pole_a,
-                        kind: JointKind::Revolute,
-                    },
-                    Joint {
-                        i: self.b,
-                        pi: pb,
-                        j: self.pole_b.body,
-                        pj: pole_b,
-                        kind: JointKind::Revolute,
-                    },
-                    Joint {
-                        i: self.a,
-                        pi: ca,
-                        j: self.b,
-                        pj: cb,
-                        kind: JointKind::Revolute,
-                    },
-                ],
-                "joints",
-            )?,
-            guess: guesses(&self.guess),
-            consts: [
-                la,
-                lb,
-                va.x / la,
-                va.y / la,
-                wb.x / lb,
-                wb.y / lb,
-                va.y.atan2(va.x),
-                wb.y.atan2(wb.x),
+        let ang = |k: u8| Angle::of(Base::Var(k));
+        g.kind = GroupKind::Rrr;
+        g.n_vars = 2;
+        push_chain(
+            g,
+            self.pole_a,
+            &[
+                Term::Arm {
+                    angle: ang(0),
+                    v: va,
+                },
+                Term::Arm {
+                    angle: ang(1),
+                    v: -wb,
+                },
             ],
-            coord: None,
-        })
+            Some(self.pole_b),
+        )?;
+        extend(
+            &mut g.placements,
+            &[
+                Placement {
+                    link: self.a,
+                    angle: ang(0),
+                    chain: 0,
+                    prefix: 0,
+                    local: pa,
+                },
+                Placement {
+                    link: self.b,
+                    angle: ang(1),
+                    chain: 0,
+                    prefix: 1,
+                    local: cb,
+                },
+            ],
+            "placements",
+        )?;
+        extend(
+            &mut g.joints,
+            &[
+                Joint {
+                    i: self.a,
+                    pi: pa,
+                    j: self.pole_a.body,
+                    pj: pole_a,
+                    kind: JointKind::Revolute,
+                },
+                Joint {
+                    i: self.b,
+                    pi: pb,
+                    j: self.pole_b.body,
+                    pj: pole_b,
+                    kind: JointKind::Revolute,
+                },
+                Joint {
+                    i: self.a,
+                    pi: ca,
+                    j: self.b,
+                    pj: cb,
+                    kind: JointKind::Revolute,
+                },
+            ],
+            "joints",
+        )?;
+        g.guess = guesses(&self.guess);
+        g.consts = [
+            la,
+            lb,
+            va.x / la,
+            va.y / la,
+            wb.x / lb,
+            wb.y / lb,
+            va.y.atan2(va.x),
+            wb.y.atan2(wb.x),
+        ];
+        Ok(())
     }
 }
 

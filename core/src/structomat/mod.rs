@@ -150,6 +150,18 @@ impl<T: Real> Angle<T> {
     }
 }
 
+impl<T: Real> Angle<T> {
+    /// The angle `base` itself: [`Angle::new`] with a zero offset, whose cosine and
+    /// sine are exactly 1 and 0 (no trigonometry).
+    pub fn of(base: Base) -> Self {
+        Angle {
+            base,
+            offset: T::zero(),
+            offset_cs: Vec2::new(T::one(), T::zero()),
+        }
+    }
+}
+
 /// Where a slide length comes from.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Length {
@@ -280,6 +292,21 @@ pub struct Group<T: Real> {
 }
 
 impl<T: Real> Group<T> {
+    /// A group with nothing in it, for a constructor to write in place
+    /// ([`WriteGroup`](crate::model::WriteGroup)).
+    pub(crate) fn empty() -> Self {
+        Group {
+            kind: GroupKind::MotorR,
+            n_vars: 0,
+            chains: heapless::Vec::new(),
+            placements: heapless::Vec::new(),
+            joints: heapless::Vec::new(),
+            guess: [T::zero(); MAX_GROUP_VARS],
+            consts: [T::zero(); 8],
+            coord: None,
+        }
+    }
+
     /// The links of the group in thesis numbering.
     pub fn links(&self) -> impl Iterator<Item = u8> + '_ {
         self.placements.iter().map(|p| p.link)
@@ -308,6 +335,40 @@ pub(crate) fn chain<T: Real>(
         terms: v,
         end,
     })
+}
+
+/// Helper for the group constructors that write in place: appends the chain
+/// `start + Σ terms`, closing on `end` when given, to `g`.
+pub(crate) fn push_chain<T: Real>(
+    g: &mut Group<T>,
+    start: PointRef,
+    terms: &[Term<T>],
+    end: Option<PointRef>,
+) -> Result<(), crate::error::ModelError> {
+    g.chains
+        .push(Chain {
+            start,
+            terms: heapless::Vec::new(),
+            end,
+        })
+        .map_err(|_| crate::error::ModelError::Capacity("chains"))?;
+    match g.chains.last_mut() {
+        Some(c) => extend(&mut c.terms, terms, "terms in a chain"),
+        None => Err(crate::error::ModelError::Capacity("chains")),
+    }
+}
+
+/// Helper for the group constructors that write in place: appends `items` to `v`.
+pub(crate) fn extend<X: Copy, const N: usize>(
+    v: &mut heapless::Vec<X, N>,
+    items: &[X],
+    what: &'static str,
+) -> Result<(), crate::error::ModelError> {
+    for x in items {
+        v.push(*x)
+            .map_err(|_| crate::error::ModelError::Capacity(what))?;
+    }
+    Ok(())
 }
 
 /// Helper for the group constructors: a kind's guesses padded to the group capacity.

@@ -3,12 +3,12 @@
 
 use super::chain::{angle_cs, link_acceleration, link_velocity, place_link};
 use super::{
-    chain, list, point_acc, point_pos, point_vel, Angle, Base, Group, GroupData, GroupKind, Joint,
-    JointKind, Placement, PointRef,
+    extend, point_acc, point_pos, point_vel, push_chain, Angle, Base, Group, GroupData, GroupKind,
+    Joint, JointKind, Placement, PointRef,
 };
 use crate::config::MAX_GROUP_VARS;
 use crate::error::{GroupFault, ModelError};
-use crate::model::Model;
+use crate::model::{Model, Points, WriteGroup};
 use crate::scalar::Real;
 use crate::workspace::BodyState;
 
@@ -30,46 +30,54 @@ pub struct MotorR<T: Real> {
 impl<T: Real> MotorR<T> {
     /// Builds the group's description against the links declared so far.
     pub fn build(&self, model: &Model<T>) -> Result<Group<T>, ModelError> {
+        let mut g = Group::empty();
+        self.write(&model.points(), &mut g)?;
+        Ok(g)
+    }
+}
+
+impl<T: Real> WriteGroup<T> for MotorR<T> {
+    /// [`MotorR::build`], in place.
+    fn write(&self, model: &Points<'_, T>, g: &mut Group<T>) -> Result<(), ModelError> {
         let local = model.local(self.link, self.link_point, "motor element R: link point")?;
         let pivot = model.resolve(self.pivot, "motor element R: pivot")?;
         let angle = Angle::new(Base::Coord(self.coord), self.offset);
-        Ok(Group {
-            kind: GroupKind::MotorR,
-            n_vars: 0,
-            chains: list(&[chain(self.pivot, &[], None)?], "chains")?,
-            placements: list(
-                &[Placement {
-                    link: self.link,
-                    angle,
-                    chain: 0,
-                    prefix: 0,
-                    local,
-                }],
-                "placements",
-            )?,
-            joints: list(
-                &[
-                    Joint {
-                        i: self.link,
-                        pi: local,
-                        j: self.pivot.body,
-                        pj: pivot,
-                        kind: JointKind::Revolute,
-                    },
-                    Joint {
-                        i: self.link,
-                        pi: local,
-                        j: self.pivot.body,
-                        pj: pivot,
-                        kind: JointKind::DriveTorque,
-                    },
-                ],
-                "joints",
-            )?,
-            guess: [T::zero(); MAX_GROUP_VARS],
-            consts: [T::zero(); 8],
-            coord: Some(self.coord),
-        })
+        g.kind = GroupKind::MotorR;
+        g.n_vars = 0;
+        push_chain(g, self.pivot, &[], None)?;
+        extend(
+            &mut g.placements,
+            &[Placement {
+                link: self.link,
+                angle,
+                chain: 0,
+                prefix: 0,
+                local,
+            }],
+            "placements",
+        )?;
+        extend(
+            &mut g.joints,
+            &[
+                Joint {
+                    i: self.link,
+                    pi: local,
+                    j: self.pivot.body,
+                    pj: pivot,
+                    kind: JointKind::Revolute,
+                },
+                Joint {
+                    i: self.link,
+                    pi: local,
+                    j: self.pivot.body,
+                    pj: pivot,
+                    kind: JointKind::DriveTorque,
+                },
+            ],
+            "joints",
+        )?;
+        g.coord = Some(self.coord);
+        Ok(())
     }
 }
 

@@ -8,11 +8,11 @@
 //! from the last configuration ([`newton`](super::newton)).
 
 use super::{
-    chain, guesses, list, Angle, Base, Group, GroupKind, Joint, JointKind, Placement, PointRef,
-    Term,
+    extend, guesses, push_chain, Angle, Base, Group, GroupKind, Joint, JointKind, Placement,
+    PointRef, Term,
 };
 use crate::error::ModelError;
-use crate::model::Model;
+use crate::model::{Model, Points, WriteGroup};
 use crate::scalar::Real;
 
 /// Triad RR-RR-RR.
@@ -38,6 +38,15 @@ pub struct TriadRrRrRr<T: Real> {
 impl<T: Real> TriadRrRrRr<T> {
     /// Builds the group's description.
     pub fn build(&self, model: &Model<T>) -> Result<Group<T>, ModelError> {
+        let mut g = Group::empty();
+        self.write(&model.points(), &mut g)?;
+        Ok(g)
+    }
+}
+
+impl<T: Real> WriteGroup<T> for TriadRrRrRr<T> {
+    /// [`TriadRrRrRr::build`], in place.
+    fn write(&self, model: &Points<'_, T>, g: &mut Group<T>) -> Result<(), ModelError> {
         let mut kp = [nalgebra::Vector2::zeros(); 3];
         let mut tp = kp;
         let mut tt = kp;
@@ -66,9 +75,10 @@ impl<T: Real> TriadRrRrRr<T> {
                 "triad: the ternary link's joints coincide",
             ));
         }
-        let ang = |k: u8| Angle::new(Base::Var(k), T::zero());
-        let chain_to = |k: usize, var: u8| {
-            chain(
+        let ang = |k: u8| Angle::of(Base::Var(k));
+        let chain_to = |g: &mut Group<T>, k: usize, var: u8| {
+            push_chain(
+                g,
                 self.poles[0],
                 &[
                     Term::Arm {
@@ -110,47 +120,46 @@ impl<T: Real> TriadRrRrRr<T> {
                 kind: JointKind::Revolute,
             };
         }
-        Ok(Group {
-            kind: GroupKind::Triad,
-            n_vars: 4,
-            chains: list(&[chain_to(1, 1)?, chain_to(2, 2)?], "chains")?,
-            placements: list(
-                &[
-                    Placement {
-                        link: self.binary[0],
-                        angle: ang(0),
-                        chain: 0,
-                        prefix: 0,
-                        local: kp[0],
-                    },
-                    Placement {
-                        link: self.ternary,
-                        angle: ang(3),
-                        chain: 0,
-                        prefix: 1,
-                        local: tt[0],
-                    },
-                    Placement {
-                        link: self.binary[1],
-                        angle: ang(1),
-                        chain: 0,
-                        prefix: 2,
-                        local: tp[1],
-                    },
-                    Placement {
-                        link: self.binary[2],
-                        angle: ang(2),
-                        chain: 1,
-                        prefix: 2,
-                        local: tp[2],
-                    },
-                ],
-                "placements",
-            )?,
-            joints: list(&joints, "joints")?,
-            guess: guesses(&self.guess),
-            consts: [T::zero(); 8],
-            coord: None,
-        })
+        g.kind = GroupKind::Triad;
+        g.n_vars = 4;
+        chain_to(g, 1, 1)?;
+        chain_to(g, 2, 2)?;
+        extend(
+            &mut g.placements,
+            &[
+                Placement {
+                    link: self.binary[0],
+                    angle: ang(0),
+                    chain: 0,
+                    prefix: 0,
+                    local: kp[0],
+                },
+                Placement {
+                    link: self.ternary,
+                    angle: ang(3),
+                    chain: 0,
+                    prefix: 1,
+                    local: tt[0],
+                },
+                Placement {
+                    link: self.binary[1],
+                    angle: ang(1),
+                    chain: 0,
+                    prefix: 2,
+                    local: tp[1],
+                },
+                Placement {
+                    link: self.binary[2],
+                    angle: ang(2),
+                    chain: 1,
+                    prefix: 2,
+                    local: tp[2],
+                },
+            ],
+            "placements",
+        )?;
+        extend(&mut g.joints, &joints, "joints")?;
+        g.guess = guesses(&self.guess);
+        Ok(())
     }
 }
