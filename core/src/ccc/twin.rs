@@ -21,7 +21,7 @@ use crate::dynamics::finish_accelerations;
 use crate::error::{GroupFault, GroupId, ModelError, StepError};
 use crate::integrator::Dp5;
 use crate::kinetostatics::reactions;
-use crate::scalar::{unit, Real, Vec2};
+use crate::scalar::{Real, Vec2};
 use crate::structomat::GroupData;
 use core::fmt;
 use nalgebra::{SMatrix, SVector};
@@ -2274,18 +2274,18 @@ impl<T: Real> Twin<T> {
 // ---- helpers ----
 
 /// Largest distance between the joints (both ends of every link, and D) of two
-/// physical states, m.
+/// physical states, m, bounded from above without trigonometry: a joint at `x` along
+/// a link whose origin moved by `Δo` and which turned by `Δθ` moved by at most
+/// `|Δo| + 2|sin(Δθ/2)| x ≤ |Δo| + |Δθ| x`, exact to third order in `Δθ` (the states
+/// compared agree to ~1e-13 m and rad). 18 `sin_cos` fewer than measuring each joint.
 fn joint_gap<T: Real>(params: &CccParams<T>, a: &[LinkState<T>; 9], b: &[LinkState<T>; 9]) -> T {
-    let mut gap2 = T::zero();
+    let mut gap = T::zero();
     for p in 1..9 {
-        let len = params.link(p).length;
-        let (ua, ub) = (unit(a[p].theta), unit(b[p].theta));
-        for x in [T::zero(), len, params.rocker_d] {
-            let gap_at = (a[p].origin + ua * x) - (b[p].origin + ub * x);
-            gap2 = gap2.max(gap_at.norm_squared());
-        }
+        let reach = params.link(p).length.abs().max(params.rocker_d.abs());
+        let turn = (unwrap_near(b[p].theta, a[p].theta) - a[p].theta).abs();
+        gap = gap.max((a[p].origin - b[p].origin).norm() + turn * reach);
     }
-    gap2.sqrt()
+    gap
 }
 
 /// Writes a slot's coordinates `q` and their speeds (the angular speeds `omega` of the
