@@ -429,7 +429,8 @@ pub struct Twin<T: Real> {
     /// (rad/s²; `None` for the others): the slopes of [`hermite_root`]'s interpolant.
     guard_rates: Guards<T>,
     /// The event functions at the start of the last DP5 step, if it had no event, and
-    /// its length (s): a third sample of a torque function for [`quadratic_root`].
+    /// its length (s): a third sample of a torque function for [`quadratic_root`], a
+    /// fifth of a speed function for [`hermite_root`].
     last_guards: Option<(Guards<T>, T)>,
     audit: Audit<T>,
     events: heapless::Vec<Event<T>, MAX_EVENTS_PER_STEP>,
@@ -1152,9 +1153,9 @@ impl<T: Real> Twin<T> {
     ///
     /// `(g0, r0)`: the event functions and the speed functions' rates at the step's
     /// start. A single speed function fired starts the iteration from the root of its
-    /// cubic Hermite interpolant over the step ([`hermite_root`]: the values and rates
-    /// at both ends, no evaluation), 4th-order accurate: S2's catches and shaft stops
-    /// are then located in 2–3 evaluations instead of 3–5. A single torque function
+    /// Hermite interpolant over the step ([`hermite_root`]: the values and rates at
+    /// both ends, and the value at the start of the step before if that step had no
+    /// event; no evaluation), 4th- or 5th-order accurate. A single torque function
     /// (a release, a breakaway; each evaluation is a full one, kinetostatics included)
     /// starts from the root of its quadratic through the step's ends and the start of
     /// the step before ([`quadratic_root`]), if that step had no event.
@@ -1166,9 +1167,9 @@ impl<T: Real> Twin<T> {
     /// point, of a Newton step back on the Hermite interpolant's slope. Near the
     /// crossing it aims just past it: the first point half the tolerance past the
     /// Hermite root, the next 0.4 tol past the crossing that Newton step or the
-    /// secant places. 11 of S2's 19 speed events take 1 evaluation, the others 2
-    /// (some torque events 3), instead of 2–5: a bracket closed on both sides needs a
-    /// point on each, and the guess is rarely within the tolerance.
+    /// secant places. S2's 18 speed events take 1 evaluation, its torque events 2–3,
+    /// instead of 2–5: a bracket closed on both sides needs a point on each, and the
+    /// cubic's guess was rarely within the tolerance.
     ///
     /// Not inlined, nor is [`Twin::try_candidate`]: with both inlined the f64 step's
     /// stack high-water was 20.6 KB instead of 16.7 KB (`tests/footprint.rs`).
@@ -1223,7 +1224,7 @@ impl<T: Real> Twin<T> {
             (Some(Some(a)), Some(Some(b)), Some(Some(ra)), Some(Some(rb)))
                 if single && speeds_only =>
             {
-                hermite_root(*a, *b, *ra * h, *rb * h, tol)
+                hermite_root(*a, *b, *ra * h, *rb * h, before, tol)
             }
             (Some(Some(a)), Some(Some(b)), _, _) if single && !speeds_only => {
                 before.and_then(|(gm, r)| quadratic_root(gm, r, *a, *b, tol))
@@ -1242,10 +1243,10 @@ impl<T: Real> Twin<T> {
         let chord = ghi - glo;
         let trusted =
             slope.filter(|s| speeds_only && *s >= chord * T::c(0.5) && *s <= chord * T::c(2.0));
-        // The first point aims half the tolerance past the Hermite root: the cubic's
-        // root is off the crossing by ~tol in S2 (under 0.7 tol for 11 of its 18 speed
-        // events), so about half of them land past the crossing within the tolerance
-        // and are located by the one evaluation (see `trusted` below).
+        // The first point aims half the tolerance past the Hermite root, which is off
+        // the crossing by under half the tolerance when the step before gives the
+        // quartic (all of S2's 18 speed events): it lands past the crossing within the
+        // tolerance and is located by the one evaluation (see `trusted` below).
         let mut guess = guess.map(|(th, _)| {
             if trusted.is_some() {
                 th + tol * T::c(0.5)
@@ -2422,27 +2423,55 @@ fn rows_mismatch<T: Real>(rows: &[SVector<T, 3>], u: &SVector<T, 3>) -> T {
 
 /// The root in (0, 1) of the cubic Hermite interpolant of an event function over a
 /// step, `p(0) = g0 ≤ 0 < p(1) = g1` with slopes `s0`, `s1` (per unit of the step's
-/// fraction θ: h·dg/dt), to `tol`/100 ([`bracketed_root`]). No evaluation of the
-/// mechanism: the first point of [`Twin::locate`]'s iteration, O(h⁴) from the true
-/// crossing. `None` if the values do not bracket a root.
-fn hermite_root<T: Real>(g0: T, g1: T, s0: T, s1: T, tol: T) -> Option<(T, T)> {
+/// fraction θ: h·dg/dt), to `tol`/100 ([`bracketed_root`]); with `before`, the value
+/// `gm` at the start of the step before (θ = -r, `r` its length over this one's), of
+/// the quartic that also passes there. No evaluation of the mechanism: the first
+/// point of [`Twin::locate`]'s iteration, O(h⁴) from the true crossing (the quartic
+/// O(h⁵)). In S2 the cubic's roots were off the crossings by up to 15 of
+/// [`Twin::locate`]'s tolerances (1e-8 of the step), the quartic's by at most 0.41
+/// (most by under 0.05). `None` if the values do not bracket a root.
+fn hermite_root<T: Real>(
+    g0: T,
+    g1: T,
+    s0: T,
+    s1: T,
+    before: Option<(T, T)>,
+    tol: T,
+) -> Option<(T, T)> {
     if !(s0.finite() && s1.finite()) {
         return None;
     }
     let one = T::one();
     let (two, three, six) = (T::c(2.0), T::c(3.0), T::c(6.0));
     // p(θ) = h00 g0 + h10 s0 + h01 g1 + h11 s1 and p'(θ).
+    let cubic = |th: T| {
+        let u = one - th;
+        let value = (one + two * th) * u * u * g0
+            + th * u * u * s0
+            + th * th * (three - two * th) * g1
+            + th * th * (th - one) * s1;
+        let slope = six * th * (th - one) * (g0 - g1)
+            + (three * th * th - T::c(4.0) * th + one) * s0
+            + (three * th * th - two * th) * s1;
+        (value, slope)
+    };
+    // The quartic through the value at the start of the step before too (θ = -r):
+    // p + c θ²(θ-1)², which keeps the ends' values and slopes.
+    let c = before
+        .map(|(gm, r)| {
+            let w = r * r * (r + one) * (r + one);
+            (gm - cubic(-r).0) / w
+        })
+        .filter(|c| c.finite())
+        .unwrap_or(T::zero());
     bracketed_root(
         |th: T| {
-            let u = one - th;
-            let value = (one + two * th) * u * u * g0
-                + th * u * u * s0
-                + th * th * (three - two * th) * g1
-                + th * th * (th - one) * s1;
-            let slope = six * th * (th - one) * (g0 - g1)
-                + (three * th * th - T::c(4.0) * th + one) * s0
-                + (three * th * th - two * th) * s1;
-            (value, slope)
+            let (v, d) = cubic(th);
+            let u = th - one;
+            (
+                v + c * th * th * u * u,
+                d + c * two * th * u * (two * th - one),
+            )
         },
         g0,
         g1,
@@ -2800,4 +2829,62 @@ fn check_inputs<T: Real>(inputs: &Inputs<T>) -> Result<(), TwinError> {
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{bracketed_root, hermite_root};
+
+    /// An event function over a step (θ in [0, 1]) and its slope.
+    fn quartic(th: f64) -> (f64, f64) {
+        // (θ - 0.37)(θ² + 2)(θ + 3): one root in (0, 1), at 0.37.
+        let (a, b, c) = (th - 0.37, th * th + 2.0, th + 3.0);
+        (a * b * c, b * c + a * 2.0 * th * c + a * b)
+    }
+
+    #[test]
+    fn the_quartic_through_the_step_before_finds_a_quartic_crossing() {
+        let tol = 1e-8;
+        let (g0, s0) = quartic(0.0);
+        let (g1, s1) = quartic(1.0);
+        let r = 0.8;
+        let gm = quartic(-r).0;
+        let (root, slope) = hermite_root(g0, g1, s0, s1, Some((gm, r)), tol).unwrap();
+        // A quartic is its own interpolant: the root to the solver's tol/100.
+        assert!((root - 0.37).abs() <= tol * 0.01, "{root}");
+        assert!((slope - quartic(0.37).1).abs() <= 1e-9 * slope.abs());
+        // The cubic alone is off by its interpolation error, far past the tolerance:
+        // the step before's value is what brings the root to it.
+        let (cubic, _) = hermite_root(g0, g1, s0, s1, None, tol).unwrap();
+        assert!((cubic - 0.37).abs() > 100.0 * tol, "{cubic}");
+    }
+
+    #[test]
+    fn the_cubic_finds_a_cubic_crossing() {
+        let tol = 1e-8;
+        // (θ - 0.61)(θ² + 1): Hermite's cubic is exact.
+        let g = |th: f64| {
+            (
+                (th - 0.61) * (th * th + 1.0),
+                th * th + 1.0 + (th - 0.61) * 2.0 * th,
+            )
+        };
+        let ((g0, s0), (g1, s1)) = (g(0.0), g(1.0));
+        let (root, _) = hermite_root(g0, g1, s0, s1, None, tol).unwrap();
+        assert!((root - 0.61).abs() <= tol * 0.01, "{root}");
+    }
+
+    #[test]
+    fn a_converged_newton_step_ends_the_search_inside_the_bracket() {
+        // A root Newton lands on exactly: its next step is 0 and must end the search
+        // there, not bisect from an end (the bracket then closes on the root).
+        let tol = 1e-8;
+        let p = |th: f64| (th - 0.5, 1.0);
+        let (root, slope) = bracketed_root(p, -0.5, 0.5, tol).unwrap();
+        assert_eq!(root, 0.5);
+        assert_eq!(slope, 1.0);
+        // No bracket, no root.
+        assert!(bracketed_root(p, 0.5, 0.5, tol).is_none());
+        assert!(hermite_root(0.1, 0.5, 1.0, 1.0, None, tol).is_none());
+    }
 }
