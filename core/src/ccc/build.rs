@@ -451,6 +451,49 @@ pub(crate) fn driving_link(mode: Mode, coords: Coordinates) -> Option<usize> {
     }
 }
 
+/// The conditioning of `mode`'s model in `coords` at the physical link angles `pose`
+/// (rad, index 1..=8) without building it, for a choice of RRR dyads and motor
+/// elements only (these are conditioned 1), as [`declare`] builds it: the least
+/// |sin(θa − θb)| over its dyads of links a and b, every link's joints lying on its
+/// axis (a dyad's conditioning is |w_a × w_b| / (l_a l_b), its links' joint-to-joint
+/// vectors).
+/// `None` for a choice with a Newton group (the crank of a 1-DOF mode) or one the mode
+/// does not have.
+pub(crate) fn dyads_conditioning<T: Real>(
+    mode: Mode,
+    coords: Coordinates,
+    pose: &[T; 9],
+) -> Option<T> {
+    let [(rod5, lever6), (rod7, lever8)] = BRANCHES;
+    let free = [(rod5, lever6), (rod7, lever8)];
+    let pairs = match coords {
+        Coordinates::CrankSwing if mode.dof() == 2 => [(COUPLER, ROCKER), free[0], free[1]],
+        Coordinates::CrankCoupler if mode.dof() == 2 => [(ROCKER, SWING), free[0], free[1]],
+        Coordinates::SwingRocker if mode.dof() == 2 => [(COUPLER, CRANK), free[0], free[1]],
+        Coordinates::Swing | Coordinates::Rod if matches!(mode, Mode::I6 | Mode::I8) => {
+            // The locked branch's rod closes the rocker (swing) or drives (rod).
+            let k = usize::from(mode == Mode::I8);
+            let (rod, _) = *BRANCHES.get(k)?;
+            let other = *free.get(1 - k)?;
+            let first = if coords == Coordinates::Swing {
+                (ROCKER, rod)
+            } else {
+                (ROCKER, SWING)
+            };
+            [first, (COUPLER, CRANK), other]
+        }
+        Coordinates::Lever if mode == Mode::A68 => {
+            [(rod5, rod7), (ROCKER, SWING), (COUPLER, CRANK)]
+        }
+        Coordinates::Rest if mode == Mode::Jam => [(rod5, rod7), (ROCKER, SWING), (COUPLER, CRANK)],
+        _ => return None,
+    };
+    let angle = |k: usize| pose.get(k).copied().unwrap_or(T::zero());
+    Some(pairs.iter().fold(T::one(), |m, (a, b)| {
+        m.min((angle(*a) - angle(*b)).sin().abs())
+    }))
+}
+
 /// The physical link angles (rad, index 1..=8) of the converter assembled at crank
 /// angle `crank` and swing-link angle `swing` on the parameters' branches (SPEC 3:
 /// C from circles about B and E, D on the rocker, G and I from circles about D and H);
@@ -505,6 +548,49 @@ mod tests {
         }
         // I6, I8: crank, swing, rod; A68: lever, crank.
         assert_eq!(checked, 8);
+    }
+
+    /// [`dyads_conditioning`] is the conditioning of the built and assembled model
+    /// (its worst group's) for every dyads-only choice, over a spread of poses, and
+    /// `None` exactly for the choices with a Newton group.
+    #[test]
+    fn dyads_conditioning_is_the_built_models() {
+        let p = CccParams::<f64>::reference();
+        let mut checked = 0;
+        for crank in [0.3, 1.2, 2.0, 2.9, 4.0, 5.3] {
+            for swing in [1.6, 1.8, 2.1] {
+                let Some(pose) = initial_pose(&p, crank, swing) else {
+                    continue;
+                };
+                for mode in Mode::ALL {
+                    for coords in mode.coordinate_choices().iter().copied() {
+                        let (model, q) = mode_model(&p, mode, coords, &pose).unwrap();
+                        let newton = model.groups().iter().any(|g| g.kind.solved_by_newton());
+                        let predicted = dyads_conditioning(mode, coords, &pose);
+                        assert_eq!(predicted.is_none(), newton, "{mode} {coords}");
+                        let Some(predicted) = predicted else {
+                            continue;
+                        };
+                        let mut ws = crate::workspace::Workspace::default();
+                        if crate::kinematics::assemble(&model, &mut ws, &q[..model.dof()]).is_err()
+                        {
+                            continue;
+                        }
+                        let built = ws
+                            .group
+                            .iter()
+                            .take(model.groups().len())
+                            .fold(1.0f64, |m, g| m.min(g.conditioning));
+                        assert!(
+                            (predicted - built).abs() <= 1e-12,
+                            "{mode} {coords} at crank {crank}: {predicted} vs {built}"
+                        );
+                        checked += 1;
+                    }
+                }
+            }
+        }
+        assert!(checked >= 100, "{checked}");
     }
 
     /// [`build_into`]'s shorter validation gives the model of [`build`], which passes

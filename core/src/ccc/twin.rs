@@ -10,7 +10,7 @@
 //! event functions are re-checked there): no event is lost, it is late by under one
 //! step, and the twin cannot chatter.
 
-use super::build::{driving_link, initial_pose, BRANCHES, CRANK, ROCKER};
+use super::build::{driving_link, dyads_conditioning, initial_pose, BRANCHES, CRANK, ROCKER};
 use super::mode::{Clutch, Coordinates, Mode};
 use super::params::CccParams;
 use super::slot::{
@@ -1698,7 +1698,28 @@ impl<T: Real> Twin<T> {
         let in_reference =
             screened.is_some() && self.reference_is_candidate(w, m, first, &omega, scale_w);
         self.cand_in_reference = in_reference;
-        let ok = in_reference || {
+        // A dyads-only first choice whose conditioning at the pose (no build:
+        // `dyads_conditioning`) is under `switch_below` is not the pick if the next
+        // choice that assembles is conditioned at least `switch_below` and 1.5 times
+        // better: that one is then built first, and alone. (S2's catch at 0.0632 s
+        // built I6's swing choice, 0.13, before taking the crank's; the margins keep
+        // rounding of the prediction from deciding.)
+        let mut live = choices.iter().copied().filter(|c| !dead(*c));
+        let (c1, c2) = (live.next(), live.next());
+        let poor = c1
+            .and_then(|c| dyads_conditioning(m, c, pose))
+            .filter(|p| *p < self.settings.switch_below * T::c(1.0 - 1e-9));
+        let skipped = !in_reference
+            && match (poor, c2) {
+                (Some(p), Some(c2)) => {
+                    self.load_candidate(w, m, c2, pose, &omega, inputs, scale_w, false) && {
+                        let cond = self.scratch(w.switched).0.conditioning();
+                        cond >= self.settings.switch_below && cond > p * T::c(1.5 * (1.0 + 1e-9))
+                    }
+                }
+                _ => false,
+            };
+        let ok = in_reference || skipped || {
             for coords in ordered {
                 if chosen.is_some() && dead(coords) {
                     break;
