@@ -54,14 +54,17 @@ pub(crate) fn cog_accelerations<T: Real>(
     bodies: &[BodyState<T>],
     a: &mut SVector<T, POSE_ROWS>,
 ) {
-    for (i, l) in model.links().iter().enumerate() {
-        let Some(b) = bodies.get(i + 1) else { continue };
+    // The live rows, 3 per link.
+    for ((l, b), rows) in model
+        .links()
+        .iter()
+        .zip(bodies.iter().skip(1))
+        .zip(a.as_mut_slice().chunks_exact_mut(3))
+    {
         let r = rotate_cs(b.c, b.s, &l.cog);
         let acc = b.a + perp(&r) * b.alpha - r * (b.omega * b.omega);
-        for (row, val) in [(3 * i, acc.x), (3 * i + 1, acc.y), (3 * i + 2, b.alpha)] {
-            if let Some(e) = a.get_mut(row) {
-                *e = val;
-            }
+        if let [x, y, w] = rows {
+            (*x, *y, *w) = (acc.x, acc.y, b.alpha);
         }
     }
 }

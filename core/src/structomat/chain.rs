@@ -9,7 +9,7 @@
 //! The right-hand sides are the same derivatives evaluated with the group's unknown
 //! rates (or accelerations) set to zero, so no term is written twice.
 
-use super::{Angle, Base, Chain, Group, GroupKind, Length, Placement, PointRef, Term};
+use super::{Angle, Base, Chain, Group, GroupKind, Length, PointRef, Term};
 use crate::config::{MAX_CHAINS, MAX_DOF, MAX_GROUP_VARS, MAX_TERMS};
 use crate::error::GroupFault;
 use crate::model::Model;
@@ -676,35 +676,6 @@ fn factor_w<T: Real, const N: usize>(
     Ok(det)
 }
 
-/// Entry `t` of a chain's prefix sums: its start plus its first `t` terms (the anchor
-/// of a placement with prefix `t`), one row per chain.
-type PrefixSums<T> = [[Vec2<T>; MAX_TERMS + 1]; MAX_CHAINS];
-
-/// Fills one chain's row of [`PrefixSums`] from its start and its terms' values (past
-/// the chain's last term, the whole sum).
-#[inline]
-fn prefix_sums<T: Real>(
-    row: &mut [Vec2<T>; MAX_TERMS + 1],
-    start: Vec2<T>,
-    mut terms: impl Iterator<Item = Vec2<T>>,
-) {
-    let mut acc = start;
-    for slot in row.iter_mut() {
-        *slot = acc;
-        if let Some(v) = terms.next() {
-            acc += v;
-        }
-    }
-}
-
-#[inline]
-fn anchor<T: Real>(sums: &PrefixSums<T>, p: &Placement<T>) -> Vec2<T> {
-    sums.get(p.chain as usize)
-        .and_then(|r| r.get(p.prefix as usize))
-        .copied()
-        .unwrap_or_else(Vec2::zeros)
-}
-
 /// Sets the pose of every link of the group from the cached terms.
 pub(crate) fn place<T: Real>(
     g: &Group<T>,
@@ -713,14 +684,26 @@ pub(crate) fn place<T: Real>(
     bodies: &mut [BodyState<T>],
     q: &[T],
 ) {
-    // The chains start at known points (of earlier groups): their prefix sums, once.
-    let mut sums: PrefixSums<T> = [[Vec2::zeros(); MAX_TERMS + 1]; MAX_CHAINS];
-    for ((ch, row), s) in g.chains.iter().zip(gd.cache.iter()).zip(sums.iter_mut()) {
-        let terms = ch.terms.iter().zip(row.iter()).map(|(t, c)| term_pos(t, c));
-        prefix_sums(s, point_pos(model, bodies, ch.start), terms);
+    // The chains start at known points (of earlier groups): placed once each.
+    let mut starts = [Vec2::zeros(); MAX_CHAINS];
+    for (ch, s) in g.chains.iter().zip(starts.iter_mut()) {
+        *s = point_pos(model, bodies, ch.start);
     }
     for p in g.placements.iter() {
-        let anchor = anchor(&sums, p);
+        // The anchor: its chain's start plus the chain's first `prefix` terms, summed in
+        // order (the origin for a placement past its chain or past `MAX_TERMS`).
+        let c = p.chain as usize;
+        let prefix = p.prefix as usize;
+        let anchor = match (g.chains.get(c), gd.cache.get(c), starts.get(c)) {
+            (Some(ch), Some(row), Some(start)) if prefix <= MAX_TERMS => {
+                let mut a = *start;
+                for (t, tc) in ch.terms.iter().zip(row.iter()).take(prefix) {
+                    a += term_pos(t, tc);
+                }
+                a
+            }
+            _ => Vec2::zeros(),
+        };
         let theta = angle_at(&p.angle, &gd.x, q, bodies, Level::Pos);
         let cs = angle_cs(&p.angle, &gd.trig, q, bodies);
         if let Some(b) = bodies.get_mut(p.link as usize) {
@@ -831,6 +814,10 @@ trait PassLevel<T: Real> {
         xd: &[T],
         bodies: &[BodyState<T>],
     ) -> Vec2<T>;
+    /// [`known_term`](PassLevel::known_term) of an arm turned by unknown `k` alone (an
+    /// all-arm group's, [`arm_pass`]), `w` its cached `R(θ)v`: the same operations
+    /// without the matches.
+    fn known_arm(&self, w: &Vec2<T>, k: usize, xd: &[T]) -> Vec2<T>;
     /// A placement angle's derivative, the unknowns' being `u`.
     fn angle(&self, a: &Angle<T>, u: &[T], bodies: &[BodyState<T>]) -> T;
     /// Sets a link's rate (or acceleration) from its anchor point's and its angle's;
@@ -859,6 +846,11 @@ impl<T: Real> PassLevel<T> for Vel<'_, T> {
         bodies: &[BodyState<T>],
     ) -> Vec2<T> {
         term_vel(t, c, &[], self.qd, bodies)
+    }
+    #[inline]
+    fn known_arm(&self, w: &Vec2<T>, _: usize, _: &[T]) -> Vec2<T> {
+        // term_vel's arm with the unknown's rate zero.
+        perp(w) * T::zero()
     }
     #[inline]
     fn angle(&self, a: &Angle<T>, u: &[T], bodies: &[BodyState<T>]) -> T {
@@ -894,6 +886,12 @@ impl<T: Real> PassLevel<T> for Acc<'_, T> {
         bodies: &[BodyState<T>],
     ) -> Vec2<T> {
         term_acc(t, c, xd, &[], self.qd, self.qdd, bodies)
+    }
+    #[inline]
+    fn known_arm(&self, w: &Vec2<T>, k: usize, xd: &[T]) -> Vec2<T> {
+        // term_acc's arm with the unknown's acceleration zero.
+        let wk = get(xd, k as u8);
+        perp(w) * T::zero() - *w * (wk * wk)
     }
     #[inline]
     fn angle(&self, a: &Angle<T>, u: &[T], bodies: &[BodyState<T>]) -> T {
@@ -946,31 +944,7 @@ fn linear_pass<T: Real>(
             *fy = -r.y;
         }
     }
-    // W u = rhs with W as `factor` left it, size by size: a dyad's inverse times rhs,
-    // a larger group's LU substitutions (only the top-left n × n block is live).
-    let mut u = [T::zero(); MAX_GROUP_VARS];
-    match n {
-        0 => {}
-        2 => {
-            for (ur, row) in u.iter_mut().zip(gd.w_fact.iter()).take(2) {
-                let mut acc = T::zero();
-                for (m, rc) in row.iter().zip(rhs.iter()).take(2) {
-                    acc += *m * *rc;
-                }
-                *ur = acc;
-            }
-        }
-        4 => {
-            u = rhs;
-            permute(gd.w_piv, &mut u, 4);
-            crate::linalg::lu_substitute::<T, 4, MAX_GROUP_VARS>(&gd.w_fact, &mut u);
-        }
-        _ => {
-            u = rhs;
-            permute(gd.w_piv, &mut u, MAX_GROUP_VARS);
-            crate::linalg::lu_substitute::<T, MAX_GROUP_VARS, MAX_GROUP_VARS>(&gd.w_fact, &mut u);
-        }
-    }
+    let u = solve_factored(gd, n, &rhs);
     *level.unknowns(gd) = u;
     // Each placement's anchor: its chain's start plus its prefix of whole term
     // derivatives (a dyad's links need 0 and 1 terms: no table of sums).
@@ -1001,6 +975,147 @@ fn linear_pass<T: Real>(
     }
 }
 
+/// `W u = rhs` with W as [`factor`] left it in `gd`, size by size (`n` unknowns): a
+/// dyad's inverse times `rhs`, a larger group's LU substitutions (only the top-left
+/// `n × n` block is live).
+#[inline(always)]
+fn solve_factored<T: Real>(
+    gd: &GroupData<T>,
+    n: usize,
+    rhs: &[T; MAX_GROUP_VARS],
+) -> [T; MAX_GROUP_VARS] {
+    let mut u = [T::zero(); MAX_GROUP_VARS];
+    match n {
+        0 => {}
+        2 => {
+            for (ur, row) in u.iter_mut().zip(gd.w_fact.iter()).take(2) {
+                let mut acc = T::zero();
+                for (m, rc) in row.iter().zip(rhs.iter()).take(2) {
+                    acc += *m * *rc;
+                }
+                *ur = acc;
+            }
+        }
+        4 => {
+            u = *rhs;
+            permute(gd.w_piv, &mut u, 4);
+            crate::linalg::lu_substitute::<T, 4, MAX_GROUP_VARS>(&gd.w_fact, &mut u);
+        }
+        _ => {
+            u = *rhs;
+            permute(gd.w_piv, &mut u, MAX_GROUP_VARS);
+            crate::linalg::lu_substitute::<T, MAX_GROUP_VARS, MAX_GROUP_VARS>(&gd.w_fact, &mut u);
+        }
+    }
+    u
+}
+
+/// [`linear_pass`] of an all-arm group (the triad, a general Assur group: every chain
+/// closes, every term is an arm turned by an unknown), to the same bits: each term's
+/// known part (`J w θ̇` with the unknown's rate zero, `J w θ̈ - w θ̇²` with its
+/// acceleration zero) and unknown part (`J w u_k`) written out, the term and its angle
+/// matched once per pass instead of in every loop. Returns `false`, having changed
+/// nothing, for a group that is not all arms (the general pass then serves it).
+#[inline]
+fn arm_pass<T: Real>(
+    g: &Group<T>,
+    gd: &mut GroupData<T>,
+    model: &Model<T>,
+    bodies: &mut [BodyState<T>],
+    level: &impl PassLevel<T>,
+) -> bool {
+    let n = g.n_vars as usize;
+    if 2 * g.chains.len() != n {
+        return false;
+    }
+    let mut starts = [Vec2::zeros(); MAX_CHAINS];
+    let mut known = [[Vec2::zeros(); MAX_TERMS]; MAX_CHAINS];
+    let mut vars = [[0u8; MAX_TERMS]; MAX_CHAINS];
+    let mut rhs = [T::zero(); MAX_GROUP_VARS];
+    for ((ch, row), (((start, kn), vs), f)) in g.chains.iter().zip(gd.cache.iter()).zip(
+        starts
+            .iter_mut()
+            .zip(known.iter_mut())
+            .zip(vars.iter_mut())
+            .zip(rhs.chunks_exact_mut(2)),
+    ) {
+        let Some(end) = ch.end else { return false };
+        *start = level.point(model, bodies, ch.start);
+        let mut r = *start - level.point(model, bodies, end);
+        for (((t, c), kv), v) in ch
+            .terms
+            .iter()
+            .zip(row.iter())
+            .zip(kn.iter_mut())
+            .zip(vs.iter_mut())
+        {
+            let Term::Arm {
+                angle: Angle {
+                    base: Base::Var(k), ..
+                },
+                ..
+            } = t
+            else {
+                return false;
+            };
+            *v = *k;
+            *kv = level.known_arm(&c.w, *k as usize, &gd.xd);
+            r += *kv;
+        }
+        if let [fx, fy] = f {
+            *fx = -r.x;
+            *fy = -r.y;
+        }
+    }
+    let u = solve_factored(gd, n, &rhs);
+    *level.unknowns(gd) = u;
+    for p in g.placements.iter() {
+        let ci = p.chain as usize;
+        let (Some(ch), Some(row), Some(start), Some(kn), Some(vs)) = (
+            g.chains.get(ci),
+            gd.cache.get(ci),
+            starts.get(ci),
+            known.get(ci),
+            vars.get(ci),
+        ) else {
+            continue;
+        };
+        let mut anchor = *start;
+        for ((c, kv), k) in row
+            .iter()
+            .zip(kn.iter())
+            .zip(vs.iter())
+            .take((p.prefix as usize).min(ch.terms.len()))
+        {
+            anchor += *kv + (Vec2::zeros() + perp(&c.w) * get(&u, *k));
+        }
+        let rate = level.angle(&p.angle, &u, bodies);
+        if let Some(b) = bodies.get_mut(p.link as usize) {
+            level.set_link(b, anchor, rate, &p.local);
+        }
+    }
+    true
+}
+
+/// One linear pass of a group without a closed form of its own: [`arm_pass`] for the
+/// triad and a general Assur group (all arms, as their builders make them), else (or
+/// if it refuses the group) the general [`linear_pass`].
+#[inline]
+fn any_linear_pass<T: Real>(
+    g: &Group<T>,
+    gd: &mut GroupData<T>,
+    model: &Model<T>,
+    bodies: &mut [BodyState<T>],
+    level: &impl PassLevel<T>,
+) {
+    if matches!(g.kind, GroupKind::Triad | GroupKind::Assur)
+        && arm_pass(g, gd, model, bodies, level)
+    {
+        return;
+    }
+    linear_pass(g, gd, model, bodies, level);
+}
+
 /// Solves `W ẋ = -(known part of ḟ)` and sets the links' velocities.
 pub(crate) fn velocity_pass<T: Real>(
     g: &Group<T>,
@@ -1012,7 +1127,7 @@ pub(crate) fn velocity_pass<T: Real>(
     match g.kind {
         GroupKind::Rrr => super::dyad_rrr::velocity(g, gd, model, bodies),
         GroupKind::MotorR => super::motor_r::velocity(g, gd, model, bodies, qd),
-        _ => linear_pass(g, gd, model, bodies, &Vel { qd }),
+        _ => any_linear_pass(g, gd, model, bodies, &Vel { qd }),
     }
 }
 
@@ -1029,7 +1144,7 @@ pub(crate) fn acceleration_pass<T: Real>(
     match g.kind {
         GroupKind::Rrr => super::dyad_rrr::acceleration(g, gd, model, bodies),
         GroupKind::MotorR => super::motor_r::acceleration(g, gd, model, bodies, qdd),
-        _ => linear_pass(g, gd, model, bodies, &Acc { qd, qdd }),
+        _ => any_linear_pass(g, gd, model, bodies, &Acc { qd, qdd }),
     }
 }
 
