@@ -88,19 +88,19 @@ const PINS: &[Pin<'static>] = &[
     Pin {
         args: "ccc-s2",
         exit: 0,
-        csv: "73fcce8dc3ab7f56901344fa395f3ffd31cf2c29e9d0cfd230af169ef0b8f881",
+        csv: "858a3bfc3f6c8b18f3e016a31f3594c88ef5f75696d3105f900fc5a3486741ed",
         logs: Some((
-            "42a7b9fe0b14c80e62d7f096ef174a3a6ddecd3eb9b273b56bdca9f894da999e",
-            "8dfc3b32275d05975c5fe215194c3aa68a11dcc9779e57579d9aec9ed0069830",
+            "105c7200613ececd96f718a1faadbc99e49eb27a5f0b880c0642393281df3d96",
+            "8a6dc425ca8077eec2849c1b9bfc1411ff579062ea580786bbaa8d47321d8326",
         )),
     },
     Pin {
         args: "ccc-s2 --ccw",
         exit: 0,
-        csv: "cd92c47c8d1f1a01732be5acca82ab54ce5927974425ebe91b9a0f2747a6f7b1",
+        csv: "03f219fc77130867215e7b50b407d3424fe1bea524d83f4964cb5af83faa7c88",
         logs: Some((
-            "9e1a82f4b03bb7e30a146afd35024a1e2e8d40ac798fb599ce576d7a221c0e0b",
-            "5d10d2998408b250a6cb88574e160e3ac1ec925769e131f6f21ec5e84544de1e",
+            "df4f92d991147c5ad472576bccad21ff380439e6ab35fc717130a86bd47e5f32",
+            "f62a398f2f898fb8152c2632e6d7fafba5da7c2ffd2da93706153640823eac5b",
         )),
     },
     Pin {
@@ -121,10 +121,10 @@ const PINS: &[Pin<'static>] = &[
     Pin {
         args: "ccc-s2 --f32",
         exit: 0,
-        csv: "47e5df2a8b1b52de806e07567f8b16a26ac83a34fc36702c64ef1c114cd53356",
+        csv: "8f343b511c98f19515604fe3236eb273970fe30c2ab66291e6116262718d879b",
         logs: Some((
-            "cc655b265ca0291849da9b0e3a8af332d66f1f18dfc8ab51bc533ddf333b3e35",
-            "8bb304fc9aba3f78d221f30191da0a2b559dfb61345ee253c1e9c7fd955161f9",
+            "ae8a0b022d34018417a0cc68b389270b6434a8ffc1447e5043b90d717e7489a1",
+            "7993420613b636e4365eba947e283e5b503731fc986054d7d44d5731d9fb69a7",
         )),
     },
 ];
