@@ -6,8 +6,8 @@
 //!   coordinate switch;
 //! - `twin/plain_step/A`: the same in an A mode (A6, A8: 2 DOF; A68: 1 DOF);
 //! - `twin/event_step/shaft_start`: the step holding S2's first breakaway (catch8 at a
-//!   crank dead point, I6 → A68 driven by the crank, t ≈ 0.0666 s: 4 candidates are
-//!   tried), located inside the step, with its mode switch;
+//!   crank dead point, I6 → A68 driven by the crank, t ≈ 0.0666 s: the slowest event
+//!   step under criterion), located inside the step, with its mode switch;
 //! - `twin/event_step/catch`: the first catch that changes the mode (I0 → I6);
 //! - `twin/event_step/shaft_stop`: the first shaft stop (A → I);
 //! - `twin/switch_step`: the first step with a change of independent coordinates and
