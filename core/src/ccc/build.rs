@@ -464,17 +464,19 @@ pub(crate) fn dyads_conditioning<T: Real>(
     coords: Coordinates,
     pose: &[T; 9],
 ) -> Option<T> {
-    let [(rod5, lever6), (rod7, lever8)] = BRANCHES;
-    let free = [(rod5, lever6), (rod7, lever8)];
+    let [(rod5, _), (rod7, _)] = BRANCHES;
+    // The diode branches as free dyads (rod, lever).
+    let [b0, b1] = BRANCHES;
     let pairs = match coords {
-        Coordinates::CrankSwing if mode.dof() == 2 => [(COUPLER, ROCKER), free[0], free[1]],
-        Coordinates::CrankCoupler if mode.dof() == 2 => [(ROCKER, SWING), free[0], free[1]],
-        Coordinates::SwingRocker if mode.dof() == 2 => [(COUPLER, CRANK), free[0], free[1]],
-        Coordinates::Swing | Coordinates::Rod if matches!(mode, Mode::I6 | Mode::I8) => {
-            // The locked branch's rod closes the rocker (swing) or drives (rod).
-            let k = usize::from(mode == Mode::I8);
+        Coordinates::CrankSwing if mode.dof() == 2 => [(COUPLER, ROCKER), b0, b1],
+        Coordinates::CrankCoupler if mode.dof() == 2 => [(ROCKER, SWING), b0, b1],
+        Coordinates::SwingRocker if mode.dof() == 2 => [(COUPLER, CRANK), b0, b1],
+        Coordinates::Swing | Coordinates::Rod if mode.dof() == 1 => {
+            // The locked branch's rod closes the rocker (swing) or drives (rod); the
+            // other branch is a free dyad (as `declare`'s `locked` and `free_branch`).
+            let k = mode.clutches().iter().position(|c| *c == Clutch::Locked)?;
             let (rod, _) = *BRANCHES.get(k)?;
-            let other = *free.get(1 - k)?;
+            let other = *BRANCHES.get(1 - k)?;
             let first = if coords == Coordinates::Swing {
                 (ROCKER, rod)
             } else {

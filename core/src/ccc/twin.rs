@@ -817,7 +817,7 @@ impl<T: Real> Twin<T> {
                     (Some(g), Some(r)) => *g + T::c(4.0) * h * r.abs() > T::zero(),
                     _ => false,
                 });
-            self.finish_step(w, inputs, &g0, h, may_defer)?;
+            self.finish_step(w, inputs, may_defer.then_some((&g0, h)))?;
             let fired = fired(&g0, &self.guards);
             if fired == 0 || events >= MAX_EVENTS_PER_STEP || !self.settings.clutch {
                 self.last_guards = (fired == 0).then_some((g0, h));
@@ -985,20 +985,16 @@ impl<T: Real> Twin<T> {
     /// [`Twin::finish`] when the slot's workspace already holds the evaluation of `w`'s
     /// state (after an accepted DP5 step, whose last stage is `f(t1, y1)`, FSAL).
     fn finish_evaluated(&mut self, w: &Work<T>, inputs: &Inputs<T>) -> Result<(), TwinError> {
-        let slot = self.slots.cur_mut();
-        finish_accelerations(&slot.model, &mut slot.ws);
-        reactions(&slot.model, &mut slot.ws, w.t.to_f64()).map_err(|e| self.physical_error(e))?;
-        self.read_evaluation(inputs, None);
-        Ok(())
+        self.finish_step(w, inputs, None)
     }
 
-    /// [`Twin::finish_evaluated`] at the end of a DP5 step of length `h` from the event
-    /// functions `g0`, except that with `may_defer` (the step will locate an event
-    /// that fires) the kinetostatics waits when a speed function fired and the torque
-    /// functions cannot have crossed (`torques_can_wait`): the step then goes on from
-    /// the event inside it, and this state, with the clutch torques of the step's
-    /// start (`c_screened`), is dropped. It spared 7-8k instructions of the 12-16k
-    /// kinetostatics of a Newton-group model at S2's slowest event steps. Not
+    /// [`Twin::finish_evaluated`], except that with `defer` (the event functions `g0`
+    /// at the start of the DP5 step of length `h` this state ends, the step to locate
+    /// an event that fires) the kinetostatics waits when a speed function fired and
+    /// the torque functions cannot have crossed (`torques_can_wait`): the step then goes
+    /// on from the event inside it, and this state, with the clutch torques of the
+    /// step's start (`c_screened`), is dropped. It spared 7-8k instructions of the
+    /// 12-16k kinetostatics of a Newton-group model at S2's slowest event steps. Not
     /// inlined: inlined into `advance` it raised the f32 step's stack high-water from
     /// 9.0 to 11.7 KB (`tests/footprint.rs`).
     #[inline(never)]
@@ -1006,19 +1002,18 @@ impl<T: Real> Twin<T> {
         &mut self,
         w: &Work<T>,
         inputs: &Inputs<T>,
-        g0: &Guards<T>,
-        h: T,
-        may_defer: bool,
+        defer: Option<(&Guards<T>, T)>,
     ) -> Result<(), TwinError> {
-        if !(may_defer && self.torques_can_wait(g0, h)) {
-            return self.finish_evaluated(w, inputs);
-        }
         let slot = self.slots.cur_mut();
         finish_accelerations(&slot.model, &mut slot.ws);
         let links = self.slots.cur().links(&self.params);
         // The torque functions from the start's clutch torques: as at the start.
-        let g = self.guards_of(self.slots.cur(), &links, &self.c, inputs);
-        let deferred = fired(g0, &g) & SPEED_GUARDS != 0;
+        let deferred = defer
+            .filter(|(g0, h)| self.torques_can_wait(g0, *h))
+            .is_some_and(|(g0, _)| {
+                let g = self.guards_of(self.slots.cur(), &links, &self.c, inputs);
+                fired(g0, &g) & SPEED_GUARDS != 0
+            });
         if !deferred {
             let slot = self.slots.cur_mut();
             reactions(&slot.model, &mut slot.ws, w.t.to_f64())
@@ -1690,11 +1685,9 @@ impl<T: Real> Twin<T> {
             .copied();
         // The reference model (screened: its evaluation succeeded) may be the pick
         // itself, the first choice of its mode, evaluated at the candidate's state.
-        let first = choices
-            .iter()
-            .copied()
-            .find(|c| !dead(*c))
-            .or(choices.first().copied());
+        let mut live = choices.iter().copied().filter(|c| !dead(*c));
+        let (c1, c2) = (live.next(), live.next());
+        let first = c1.or(choices.first().copied());
         let in_reference =
             screened.is_some() && self.reference_is_candidate(w, m, first, &omega, scale_w);
         self.cand_in_reference = in_reference;
@@ -1704,8 +1697,6 @@ impl<T: Real> Twin<T> {
         // better: that one is then built first, and alone. (S2's catch at 0.0632 s
         // built I6's swing choice, 0.13, before taking the crank's; the margins keep
         // rounding of the prediction from deciding.)
-        let mut live = choices.iter().copied().filter(|c| !dead(*c));
-        let (c1, c2) = (live.next(), live.next());
         let poor = c1
             .and_then(|c| dyads_conditioning(m, c, pose))
             .filter(|p| *p < self.settings.switch_below * T::c(1.0 - 1e-9));
