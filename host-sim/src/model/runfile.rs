@@ -5,7 +5,7 @@
 //! Two kinds of file:
 //! - a **general mechanism**: top-level `name`, `description`, `gravity`, arrays of
 //!   tables `[[ground]]`, `[[link]]`, `[[joint]]`, `[[driver]]`, `[[load]]`, and `[run]`.
-//!   The host finds the motion-transmission sequence itself ([`crate::analysis`]).
+//!   The host finds the motion-transmission sequence itself ([`super::analysis`]).
 //! - the **converter**: `[converter]` (every field of [`CccParams`], with its eight bars
 //!   as `[[converter.link]]`) and `[run]` (mode, motor, load, steps).
 //!
