@@ -257,7 +257,7 @@ impl Source {
         let file = self.run_file().map_err(|e| e.to_string())?;
         analysis::scenario(&file).map_err(|e| match e {
             BuildError::Converter => format!(
-                "{} is a converter scenario: run it with host_sim::ccc::simulate",
+                "{} is a converter scenario: run it with host_sim::run::simulate",
                 self.name()
             ),
             e => format!("cannot build {}: {e}", self.name()),

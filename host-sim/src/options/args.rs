@@ -14,6 +14,11 @@ use crate::model::scenarios::{ScenarioId, Source};
 use clap::{Args, Parser};
 use std::path::PathBuf;
 
+/// The help's heading of the pictures' options.
+const PICTURES: &str = "Pictures";
+/// The help's heading of the converter's options.
+const CONVERTER: &str = "Converter scenarios";
+
 /// The arguments of `host-sim run` (and of a batch file's line).
 #[derive(Args, Clone, Debug, Default, PartialEq)]
 pub struct RunArgs {
@@ -51,48 +56,28 @@ pub struct RunArgs {
     /// Draw the run's plots into DIR (created if missing), each as .svg and .png
     /// (converter: crank, motor_torque, reactions, speeds, clutch_torques, mode, energy;
     /// mechanisms: coordinates, torques, reactions; the CSV's rows: --every thins them)
-    #[arg(long, value_name = "DIR", help_heading = "Pictures")]
+    #[arg(long, value_name = "DIR", help_heading = PICTURES)]
     pub plot: Option<String>,
     /// Animate the mechanism: FILE.svg (animated SVG, plays in a browser) or FILE.gif;
     /// may be given twice (one .svg, one .gif)
-    #[arg(long, value_name = "FILE", help_heading = "Pictures")]
+    #[arg(long, value_name = "FILE", help_heading = PICTURES)]
     pub animate: Vec<String>,
     /// Frames a second of the animation, 1..=50 (default 25)
-    #[arg(
-        long,
-        value_name = "N",
-        requires = "animate",
-        help_heading = "Pictures"
-    )]
+    #[arg(long, value_name = "N", requires = "animate", help_heading = PICTURES)]
     pub fps: Option<String>,
     /// Slow motion: the animation lasts X times the simulated time, 0.01..=1000 (default
     /// 1); frames are taken every 1/(fps·X) s of simulated time, at most 5000 of them
-    #[arg(
-        long,
-        value_name = "X",
-        requires = "animate",
-        help_heading = "Pictures"
-    )]
+    #[arg(long, value_name = "X", requires = "animate", help_heading = PICTURES)]
     pub slow: Option<String>,
     /// Constant motor torque on the crank, CCW positive (default 12)
-    #[arg(
-        long,
-        value_name = "N·M",
-        allow_negative_numbers = true,
-        help_heading = "Converter scenarios"
-    )]
+    #[arg(long, value_name = "N·M", allow_negative_numbers = true, help_heading = CONVERTER)]
     pub motor: Option<String>,
     /// ccc-s2: load torque T_r >= 0 on the shaft (default 800)
-    #[arg(
-        long,
-        value_name = "N·M",
-        allow_negative_numbers = true,
-        help_heading = "Converter scenarios"
-    )]
+    #[arg(long, value_name = "N·M", allow_negative_numbers = true, help_heading = CONVERTER)]
     pub load: Option<String>,
     /// ccc-s2: the shaft turns counter-clockwise (SPEC 3's CCW variant; default
     /// clockwise); ccc-s1 runs in free mode, without clutches: no --load, no --ccw
-    #[arg(long, help_heading = "Converter scenarios")]
+    #[arg(long, help_heading = CONVERTER)]
     pub ccw: bool,
 }
 
@@ -189,21 +174,41 @@ pub fn one_line(e: &clap::Error) -> String {
         .join("; ")
 }
 
+/// The arguments that `host-sim batch` and `host-sim sweep` share: where the files go,
+/// how many runs at a time, quiet.
+#[derive(Args, Clone, Debug, PartialEq)]
+pub struct JobArgs {
+    /// Where the files go (created if missing; files of the same names are replaced)
+    #[arg(long, value_name = "DIR")]
+    pub out_dir: String,
+    /// Runs at a time, on N threads (default 2, or a sweep file's threads); the files
+    /// are the same for any N
+    #[arg(long, value_name = "N")]
+    pub threads: Option<String>,
+    /// No progress, no closing summary
+    #[arg(long)]
+    pub quiet: bool,
+}
+
+impl JobArgs {
+    fn out_dir(&self) -> Result<PathBuf, UsageError> {
+        parse_path("--out-dir", &self.out_dir)
+    }
+
+    fn threads(&self) -> Result<Option<usize>, UsageError> {
+        self.threads.as_deref().map(parse_threads).transpose()
+    }
+}
+
 /// The arguments of `host-sim batch`.
 #[derive(Args, Clone, Debug, PartialEq)]
 pub struct BatchArgs {
     /// The batch file: one run a line, written like the arguments of run
     #[arg(value_name = "FILE")]
     pub file: String,
-    /// Where the files go (created if missing; files of the same names are replaced)
-    #[arg(long, value_name = "DIR")]
-    pub out_dir: String,
-    /// Runs at a time, on N threads (default 2); the files are the same for any N
-    #[arg(long, value_name = "N")]
-    pub threads: Option<String>,
-    /// No progress lines, no closing summary
-    #[arg(long)]
-    pub quiet: bool,
+    /// The output and the threads.
+    #[command(flatten)]
+    pub jobs: JobArgs,
 }
 
 impl BatchArgs {
@@ -211,9 +216,9 @@ impl BatchArgs {
     pub fn options(&self) -> Result<BatchOptions, UsageError> {
         Ok(BatchOptions {
             file: parse_path("batch", &self.file)?,
-            out_dir: parse_path("--out-dir", &self.out_dir)?,
-            threads: self.threads.as_deref().map_or(Ok(2), parse_threads)?,
-            quiet: self.quiet,
+            out_dir: self.jobs.out_dir()?,
+            threads: self.jobs.threads()?.unwrap_or(2),
+            quiet: self.jobs.quiet,
         })
     }
 }
@@ -224,12 +229,9 @@ pub struct SweepArgs {
     /// The sweep file (TOML): a base run, fixed changes, the axes, the heat-maps
     #[arg(value_name = "FILE")]
     pub file: String,
-    /// Where the table and pictures go (created if missing)
-    #[arg(long, value_name = "DIR")]
-    pub out_dir: String,
-    /// Runs at a time, on N threads (default: the file's threads, else 2)
-    #[arg(long, value_name = "N")]
-    pub threads: Option<String>,
+    /// The output and the threads.
+    #[command(flatten)]
+    pub jobs: JobArgs,
     /// bar (redrawn in place), lines (one per tenth) or none; default: bar on a
     /// terminal, else lines
     #[arg(long, value_name = "STYLE", value_parser = ["bar", "lines", "none"])]
@@ -237,9 +239,6 @@ pub struct SweepArgs {
     /// Also write each variant's CSV and logs, named as by batch
     #[arg(long)]
     pub keep_runs: bool,
-    /// No progress, no closing summary
-    #[arg(long)]
-    pub quiet: bool,
 }
 
 impl SweepArgs {
@@ -247,8 +246,8 @@ impl SweepArgs {
     pub fn options(&self) -> Result<SweepOptions, UsageError> {
         Ok(SweepOptions {
             file: parse_path("sweep", &self.file)?,
-            out_dir: parse_path("--out-dir", &self.out_dir)?,
-            threads: self.threads.as_deref().map(parse_threads).transpose()?,
+            out_dir: self.jobs.out_dir()?,
+            threads: self.jobs.threads()?,
             progress: match self.progress.as_deref() {
                 Some("bar") => ProgressStyle::Bar,
                 Some("lines") => ProgressStyle::Lines,
@@ -256,7 +255,7 @@ impl SweepArgs {
                 None => ProgressStyle::Auto,
             },
             keep_runs: self.keep_runs,
-            quiet: self.quiet,
+            quiet: self.jobs.quiet,
         })
     }
 }

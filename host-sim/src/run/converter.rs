@@ -336,7 +336,7 @@ pub fn simulate<T: Real>(
     let name = opts.scenario.name();
     let settings = settings(opts).ok_or_else(|| {
         RunError::Setup(format!(
-            "{name} is not a converter scenario: run it with host_sim::simulate"
+            "{name} is not a converter scenario: run it with host_sim::run::simulate"
         ))
     })?;
     let (Steps { t_end, n, .. }, h) = Steps::of::<T>(opts)?;
