@@ -33,7 +33,7 @@ pub fn analyze(source: &Source) -> Result<String, String> {
                 .converter()
                 .ok_or_else(|| "not a converter".to_string())?;
             text.push_str(&format!(
-                "formula   {} (the converter's twin: the mode and coordinates change as it runs; host-sim help)\n",
+                "formula   {} (the converter's twin: the mode and coordinates change as it runs; host-sim help run)\n",
                 start_formula(&c)
             ));
         }
@@ -43,7 +43,7 @@ pub fn analyze(source: &Source) -> Result<String, String> {
 
 /// Writes `host-sim list`: one line per scenario with its formula, description and
 /// integration settings. A converter scenario's formula is that of its first mode's
-/// first coordinate choice (the modes change it as they go: `host-sim help`).
+/// first coordinate choice (the modes change it as they go: `host-sim help run`).
 pub fn list(w: &mut dyn Write) -> io::Result<()> {
     let mut lines = Vec::new();
     for s in ScenarioId::ALL {

@@ -195,7 +195,7 @@ pub fn run_quiet(opts: &RunOptions) -> Outcome {
     Outcome::of(opts, run::run_quiet(opts))
 }
 
-/// The columns of `batch.csv` (described in `host-sim help`).
+/// The columns of `batch.csv` (described in `host-sim help batch`).
 pub const TABLE_COLUMNS: [&str; 15] = [
     "job",
     "line",

@@ -96,7 +96,7 @@ pub struct HeatSpec {
 }
 
 /// The outcomes of a variant that a heat-map can show: the numeric columns of
-/// `sweep.csv` (described in `host-sim help`).
+/// `sweep.csv` (described in `host-sim help sweep`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Metric {
     /// First breakaway, s: the first event that starts the held shaft.

@@ -1,6 +1,6 @@
 //! Mechanisms and runs from TOML files (issue 5): the file format, its parsing and its
 //! validation. Every key is described in `host-sim/scenarios/README.md` and in
-//! `host-sim help`.
+//! `host-sim help run`.
 //!
 //! Two kinds of file:
 //! - a **general mechanism**: top-level `name`, `description`, `gravity`, arrays of
