@@ -388,13 +388,19 @@ fn bad_arguments_exit_2_naming_the_argument() {
         ),
         (&["run", "ccc-s2", "--load", "abc"], &["--load", "'abc'"]),
         (&["run", "ccc-s2", "--load", "inf"], &["--load", "finite"]),
-        (&["run", "ccc-s2", "--load"], &["--load", "missing value"]),
+        (
+            &["run", "ccc-s2", "--load"],
+            &["--load", "a value is required"],
+        ),
         (&["run", "ccc-s2", "--motor", "x"], &["--motor", "'x'"]),
         (&["run", "ccc-s2", "--motor=NaN"], &["--motor"]),
-        (&["run", "ccc-s2", "--ccw=1"], &["--ccw", "no value"]),
+        (
+            &["run", "ccc-s2", "--ccw=1"],
+            &["--ccw", "no more were expected"],
+        ),
         (
             &["run", "ccc-s2", "--frobnicate"],
-            &["--frobnicate", "unknown option"],
+            &["--frobnicate", "unexpected argument"],
         ),
         (&["run", "ccc-s2", "--h", "0"], &["--h", "positive"]),
         (&["run", "ccc-s2", "--every", "0"], &["--every"]),
@@ -426,7 +432,11 @@ fn bad_arguments_exit_2_naming_the_argument() {
         for n in *needles {
             assert!(first.contains(n), "{args:?}: message {first:?} lacks {n:?}");
         }
-        assert!(err.contains("host-sim help"), "{args:?}: no hint: {err}");
+        // Our own checks of a value point to `host-sim help`, clap's to `--help`.
+        assert!(
+            err.contains("host-sim help") || err.contains("try '--help'"),
+            "{args:?}: no hint: {err}"
+        );
     }
 }
 
@@ -557,7 +567,7 @@ fn f32_runs() {
 
 #[test]
 fn help_describes_the_converter_scenarios() {
-    let (code, out, _) = run(&["help"]);
+    let (code, out, _) = run(&["help", "run"]);
     assert_eq!(code, 0);
     for needle in [
         "ccc-s1",

@@ -96,14 +96,17 @@ fn bad_arguments_exit_2_naming_the_argument() {
         (&["run", "five-bar", "--every", "x"], &["--every", "'x'"]),
         (
             &["run", "five-bar", "--frobnicate"],
-            &["--frobnicate", "unknown option"],
+            &["--frobnicate", "unexpected argument"],
         ),
-        (&["run", "five-bar", "--h"], &["--h", "missing value"]),
-        (&["run", "five-bar", "--out"], &["--out", "missing value"]),
+        (&["run", "five-bar", "--h"], &["--h", "a value is required"]),
+        (
+            &["run", "five-bar", "--out"],
+            &["--out", "a value is required"],
+        ),
         (&["run", "five-bar", "--h", "1e-300"], &["steps"]),
-        (&["run"], &["missing scenario"]),
-        (&["jump"], &["jump", "unknown command"]),
-        (&[], &["missing command"]),
+        (&["run"], &["required arguments were not provided"]),
+        (&["jump"], &["jump", "unrecognized subcommand"]),
+        (&[], &["requires a subcommand"]),
     ];
     for (args, needles) in cases {
         let (code, out, err) = host_sim(args);
@@ -113,9 +116,173 @@ fn bad_arguments_exit_2_naming_the_argument() {
         for n in *needles {
             assert!(first.contains(n), "{args:?}: message {first:?} lacks {n:?}");
         }
-        assert!(err.contains("host-sim help"), "{args:?}: no hint: {err}");
+        // Our own checks of a value point to `host-sim help`, clap's to `--help`.
+        assert!(
+            err.contains("host-sim help") || err.contains("try '--help'"),
+            "{args:?}: no hint: {err}"
+        );
         assert!(!err.contains("panicked"), "{args:?}: {err}");
     }
+}
+
+// Each command's help lists its own options: run's, not batch's or sweep's; the
+// reference below them is the command's own.
+#[test]
+fn help_per_command() {
+    for args in [
+        &["run", "--help"][..],
+        &["help", "run"],
+        &["run", "five-bar", "--help"],
+    ] {
+        let (code, out, err) = host_sim(args);
+        assert_eq!(code, 0, "{args:?}: {err}");
+        assert!(out.starts_with("Simulate a scenario"), "{args:?}: {out}");
+        assert!(
+            out.contains("Usage: host-sim run [OPTIONS] <SCENARIO|FILE.toml>"),
+            "{out}"
+        );
+        for run_only in [
+            "--t-end <SECONDS>",
+            "--every <N>",
+            "--animate <FILE>",
+            "--ccw",
+            "CSV columns",
+        ] {
+            assert!(out.contains(run_only), "{args:?} lacks {run_only}: {out}");
+        }
+        for other in [
+            "--out-dir",
+            "--threads",
+            "--keep-runs",
+            "--progress",
+            "Batch files",
+        ] {
+            assert!(!out.contains(other), "{args:?} has {other}: {out}");
+        }
+    }
+    let (code, out, _) = host_sim(&["batch", "--help"]);
+    assert_eq!(code, 0);
+    assert!(
+        out.contains("--out-dir <DIR>") && out.contains("--threads <N>"),
+        "{out}"
+    );
+    assert!(
+        out.contains("Batch files") && !out.contains("--every"),
+        "{out}"
+    );
+    let (code, out, _) = host_sim(&["sweep", "--help"]);
+    assert_eq!(code, 0);
+    assert!(out.contains("[possible values: bar, lines, none]"), "{out}");
+    assert!(
+        out.contains("--keep-runs") && !out.contains("--every"),
+        "{out}"
+    );
+    // -h is help everywhere, a summary of the same options.
+    let (code, short, _) = host_sim(&["run", "-h"]);
+    assert_eq!(code, 0);
+    assert!(
+        short.contains("--t-end <SECONDS>") && !short.contains("CSV columns"),
+        "{short}"
+    );
+}
+
+#[test]
+fn version_is_the_crates() {
+    for flag in ["--version", "-V"] {
+        let (code, out, err) = host_sim(&[flag]);
+        assert_eq!(code, 0, "{err}");
+        assert_eq!(out, format!("host-sim {}\n", env!("CARGO_PKG_VERSION")));
+    }
+}
+
+// A misspelled option is refused with the option it was probably meant to be.
+#[test]
+fn misspelled_options_get_a_suggestion() {
+    for (typo, meant) in [
+        ("--tt-end", "--t-end"),
+        ("--evry", "--every"),
+        ("--animat", "--animate"),
+    ] {
+        let (code, out, err) = host_sim(&["run", "five-bar", typo, "1"]);
+        assert_eq!(code, 2, "{typo}: {err}");
+        assert!(out.is_empty());
+        assert!(
+            err.contains(&format!("unexpected argument '{typo}'"))
+                && err.contains(&format!("a similar argument exists: '{meant}'")),
+            "{typo}: {err}"
+        );
+    }
+    let (code, _, err) = host_sim(&["batc", "b.batch"]);
+    assert_eq!(code, 2);
+    assert!(
+        err.contains("a similar subcommand exists: 'batch'"),
+        "{err}"
+    );
+}
+
+// A repeated option is an error, not the last value silently winning.
+#[test]
+fn repeated_options_are_refused() {
+    for args in [
+        &["run", "five-bar", "--t-end", "1", "--t-end", "2"][..],
+        &["run", "five-bar", "--t-end=1", "--t-end", "2"],
+        &["run", "five-bar", "--h", "1e-3", "--step", "2e-3"],
+        &["run", "five-bar", "--quiet", "--quiet"],
+        &["run", "five-bar", "--f32", "--f32"],
+        &["run", "five-bar", "--out", "a.csv", "--out", "b.csv"],
+        &[
+            "batch",
+            "b",
+            "--out-dir",
+            "o",
+            "--threads",
+            "1",
+            "--threads",
+            "2",
+        ],
+    ] {
+        let (code, out, err) = host_sim(args);
+        assert_eq!(code, 2, "{args:?}: {err}");
+        assert!(out.is_empty(), "{args:?}: {out}");
+        assert!(
+            err.contains("cannot be used multiple times"),
+            "{args:?}: {err}"
+        );
+    }
+    // --animate alone may be given twice (one .svg, one .gif).
+    let (code, _, err) = host_sim(&[
+        "run",
+        "five-bar",
+        "--animate",
+        "a.svg",
+        "--animate",
+        "b.svg",
+    ]);
+    assert_eq!(code, 2);
+    assert!(err.contains("one .svg and one .gif at most"), "{err}");
+}
+
+// The step size keeps its spelling --h (and takes --step); -h stays help.
+#[test]
+fn step_size_spellings() {
+    let args = ["run", "five-bar", "--t-end", "0.005", "--quiet"];
+    let (code, h, err) = host_sim(&[&args[..], &["--h", "1e-3"]].concat());
+    assert_eq!(code, 0, "{err}");
+    // 0.005 s in steps of 1 ms: the header and 6 rows, the last at t = 0.005.
+    let csv = Csv::parse(&h);
+    assert_eq!(csv.rows.len(), 6);
+    assert!((csv.col("t")[5] - 0.005).abs() < 1e-15, "{h}");
+    for other in [&["--h=1e-3"][..], &["--step", "1e-3"], &["--step=1e-3"]] {
+        let (code, out, err) = host_sim(&[&args[..], other].concat());
+        assert_eq!(code, 0, "{other:?}: {err}");
+        assert_eq!(out, h, "{other:?}");
+    }
+    let (code, out, _) = host_sim(&[&args[..], &["-h"]].concat());
+    assert_eq!(code, 0);
+    assert!(
+        out.contains("--h <SECONDS>") && out.contains("--step"),
+        "{out}"
+    );
 }
 
 // (b) Five-bar for 10 steps: header plus 11 rows, the expected columns.
@@ -323,18 +490,19 @@ fn file_errors_name_the_path_and_exit_1() {
 
 #[test]
 fn help_and_list() {
-    for args in [
-        &["help"][..],
-        &["--help"],
-        &["-h"],
-        &["run", "five-bar", "--help"],
-    ] {
+    for args in [&["help"][..], &["--help"], &["-h"]] {
         let (code, out, err) = host_sim(args);
         assert_eq!(code, 0, "{args:?}: {err}");
         assert!(
-            out.contains("Usage:") && out.contains("--every"),
+            out.contains("Usage: host-sim <COMMAND>") && out.contains("Commands:"),
             "{args:?}: {out}"
         );
+        for command in ["list", "run", "analyze", "batch", "sweep", "plot", "help"] {
+            assert!(
+                out.contains(&format!("\n  {command} ")),
+                "{args:?} lacks {command}: {out}"
+            );
+        }
     }
     let (code, out, err) = host_sim(&["list"]);
     assert_eq!(code, 0, "{err}");

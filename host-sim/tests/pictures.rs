@@ -8,7 +8,6 @@ mod common;
 
 use common::{read, run, utf8, TempDir};
 use host_sim::animate::{self, Frames};
-use host_sim::ccc::{simulate_with, Sink};
 use host_sim::draw::{heatmap, pt, Color, Figure, HeatMap, Stroke};
 use host_sim::pictures::Recorder;
 use host_sim::{RunOptions, ScenarioId};
@@ -263,8 +262,7 @@ fn mechanism_frames(scenario: ScenarioId, t_end: f64) -> Frames {
         table: None,
         frames: Some(Frames::new(scenario.name(), 10, 1.0)),
     };
-    host_sim::run::simulate_with::<f64>(&opts, &mut Vec::new(), "memory", Some(&mut rec))
-        .expect("runs");
+    host_sim::run::simulate::<f64>(&opts, &mut rec).expect("runs");
     rec.frames.expect("frames")
 }
 
@@ -294,17 +292,7 @@ fn s2_frames(t_end: f64, fps: u32, slow: f64) -> Frames {
         table: None,
         frames: Some(Frames::new("ccc-s2", fps, slow)),
     };
-    let mut csv = Vec::new();
-    simulate_with::<f64>(
-        &opts,
-        Sink {
-            w: &mut csv,
-            target: "memory".into(),
-        },
-        None,
-        Some(&mut rec),
-    )
-    .expect("S2 runs");
+    host_sim::run::simulate::<f64>(&opts, &mut rec).expect("S2 runs");
     rec.frames.expect("frames")
 }
 
@@ -464,7 +452,7 @@ fn bad_picture_options_are_clear_errors() {
         (
             &["run", "ccc-s2", "--fps", "10"],
             2,
-            "--fps: only with --animate",
+            "required arguments were not provided:\n  --animate <FILE>",
         ),
         (
             &["run", "ccc-s2", "--animate", "x.gif", "--slow", "1000"],
@@ -515,7 +503,7 @@ fn bad_picture_options_are_clear_errors() {
     assert!(err.contains("not a host-sim run CSV"), "{err}");
     let (code, _, err) = run(&["plot", &bad]);
     assert_eq!(code, 2, "{err}");
-    assert!(err.contains("missing --out-dir"), "{err}");
+    assert!(err.contains("not provided:\n  --out-dir <DIR>"), "{err}");
 }
 
 fn made_up_heatmap(nx: usize, ny: usize) -> HeatMap {

@@ -223,11 +223,11 @@ fn a_bad_variant_or_sweep_file_runs_nothing() {
         assert!(!Path::new(&out).exists());
     }
     for (args, want) in [
-        (&["sweep"][..], "missing sweep file"),
-        (&["sweep", "f.toml"][..], "missing --out-dir"),
+        (&["sweep"][..], "not provided:\n  --out-dir <DIR>\n  <FILE>"),
+        (&["sweep", "f.toml"][..], "not provided:\n  --out-dir <DIR>"),
         (
             &["sweep", "f.toml", "--out-dir", "o", "--progress", "dots"][..],
-            "--progress: 'dots'",
+            "invalid value 'dots' for '--progress <STYLE>'",
         ),
         (
             &["sweep", "f.toml", "--out-dir", "o", "--threads", "0"][..],

@@ -6,7 +6,7 @@
 //! deterministic: the same figure gives the same bytes.
 //!
 //! On top of it: [`plot`] (line plots, category bands, stacked panels, nice ticks),
-//! [`heatmap`] (parameter sweeps), [`ticks`] (nice numbers), and [`svg::animated`] (a
+//! [`heatmap()`] (parameter sweeps), [`ticks`] (nice numbers), and [`svg::animated`] (a
 //! sequence of figures of one structure as one animated SVG).
 
 pub mod heatmap;

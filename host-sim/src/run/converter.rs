@@ -1,19 +1,20 @@
-//! `host-sim run ccc-s1|ccc-s2`: the Constantinesco torque converter's scenarios (SPEC 3)
-//! on a [`structomat::ccc::Twin`]: the state CSV, the logs of the mode changes and of
-//! the coordinate switches, and the summary (events, energy audit, how the run ended).
+//! The converter runner: the Constantinesco torque converter's runs (`host-sim run
+//! ccc-s1|ccc-s2`, SPEC 3) on a [`structomat::ccc::Twin`]: it tells the observers every
+//! state, the state rows, the log lines of the mode changes and of the coordinate
+//! switches, and gathers the summary (events, energy audit, how the run ended). The
+//! one place where host-sim sets up and steps the core's twin and reads its errors.
 //!
 //! Exit codes: 0 when the run reaches `t_end`, and for `ccc-s1` also when it ends at a
 //! singularity of the mechanism ([`TwinError::at_singularity`]): that is S1's expected end
 //! (SPEC 3), reported in the summary. Any other failed step is exit code 1, after the
 //! rows and log lines before it are written and the summary is printed.
 
-use crate::cli::{Output, RunOptions};
-use crate::pictures::Recorder;
-use crate::run::{precision, RunError, Steps};
-use crate::runfile::{Body, Converter, MotorSpec, RunFile};
+use crate::error::{RunError, EXIT_FAILURE, EXIT_OK};
+use crate::model::runfile::MotorSpec;
+use crate::model::scenarios::CccScenario;
+use crate::options::{precision, RunOptions, Steps};
+use crate::output::{Cell, Observer, State, Tables};
 use std::fmt;
-use std::fs::File;
-use std::io::{self, BufWriter, Write};
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 use structomat::ccc::{
@@ -21,94 +22,6 @@ use structomat::ccc::{
     MotorInput, Twin, TwinError, TwinSettings, JOINT_NAMES,
 };
 use structomat::Real;
-
-/// A converter scenario's settings (SPEC 3), after the command-line overrides: its run
-/// file's `[converter]` and `[run]` ([`crate::runfile::Converter`]).
-#[derive(Clone, Debug, PartialEq)]
-pub struct CccScenario {
-    /// `false`: free mode, no clutch (S1).
-    pub clutch: bool,
-    /// The motor on the crank (a constant torque, N·m, CCW positive, or a motor law).
-    pub motor: MotorSpec,
-    /// Load torque T_r on the shaft, N·m (≥ 0; no effect in free mode).
-    pub load: f64,
-    /// Which way the shaft turns.
-    pub drive: DriveDirection,
-    /// Default step, s.
-    pub h: f64,
-    /// Default simulated time, s.
-    pub t_end: f64,
-    /// The file's converter: every parameter and the initial state.
-    pub converter: Box<Converter>,
-}
-
-impl CccScenario {
-    /// The structomatic formula of the mode the twin starts from (I0, or free, in its
-    /// first coordinate choice), in physical link numbers; `?` if it cannot build.
-    pub fn start_formula(&self) -> String {
-        let params = self.converter.params::<f64>();
-        let mode = if self.clutch { Mode::I0 } else { Mode::Free };
-        let coords = mode.coordinate_choices()[0];
-        initial_pose(
-            &params,
-            self.converter.crank_deg.to_radians(),
-            self.converter.swing_deg.to_radians(),
-        )
-        .and_then(|pose| mode_model(&params, mode, coords, &pose).ok())
-        .map_or_else(
-            || "?".to_string(),
-            |(model, _)| format!("{} ({mode}, {coords})", model.formula()),
-        )
-    }
-
-    /// The settings of a converter run file; `None` for a mechanism file.
-    pub fn from_file(file: &RunFile) -> Option<Self> {
-        let Body::Converter(c) = &file.body else {
-            return None;
-        };
-        Some(CccScenario {
-            clutch: c.clutch,
-            motor: c.motor,
-            load: c.load,
-            drive: c.params.drive,
-            h: file.run.h,
-            t_end: file.run.t_end,
-            converter: c.clone(),
-        })
-    }
-
-    /// With the overrides of `opts` (`--motor`, `--load`, `--ccw`).
-    pub fn with_options(mut self, opts: &RunOptions) -> Self {
-        if let Some(m) = opts.motor {
-            self.motor = MotorSpec::Constant(m);
-        }
-        if let Some(l) = opts.load {
-            self.load = l;
-        }
-        if opts.ccw {
-            self.drive = DriveDirection::Ccw;
-        }
-        self
-    }
-}
-
-impl fmt::Display for CccScenario {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        if self.clutch {
-            let dir = match self.drive {
-                DriveDirection::Cw => "CW",
-                DriveDirection::Ccw => "CCW",
-            };
-            write!(
-                f,
-                "motor {}, T_r = {} N·m, shaft {dir}, from rest",
-                self.motor, self.load
-            )
-        } else {
-            write!(f, "free mode (no clutch), motor {}, from rest", self.motor)
-        }
-    }
-}
 
 /// The event kinds, in the order of the summary's counts.
 pub const EVENT_KINDS: [EventKind; 8] = [
@@ -185,23 +98,6 @@ pub fn log_paths(out: &Path) -> (PathBuf, PathBuf) {
     )
 }
 
-/// A writer and its name for error messages (a path or `stdout`).
-pub struct Sink<'a> {
-    /// Where the lines go.
-    pub w: &'a mut dyn Write,
-    /// Its name in errors.
-    pub target: String,
-}
-
-impl Sink<'_> {
-    fn err(&self, error: io::Error) -> RunError {
-        RunError::Write {
-            target: self.target.clone(),
-            error,
-        }
-    }
-}
-
 /// How a converter run ended.
 #[derive(Clone, Debug, PartialEq)]
 pub enum End {
@@ -215,6 +111,14 @@ pub enum End {
         /// singularity): exit code 0, else 1.
         expected: bool,
     },
+}
+
+impl End {
+    /// Whether the run stopped at a singularity of the mechanism (`ccc-s1`'s expected
+    /// end, or the diode's rods and levers in line).
+    pub fn at_singularity(&self) -> bool {
+        matches!(self, End::Stopped { error, .. } if error.at_singularity())
+    }
 }
 
 /// What a converter run did (printed as a few lines by its `Display`).
@@ -269,10 +173,10 @@ impl CccSummary {
     /// when a step failed otherwise.
     pub fn exit_code(&self) -> u8 {
         match self.end {
-            End::Completed | End::Stopped { expected: true, .. } => crate::EXIT_OK,
+            End::Completed | End::Stopped { expected: true, .. } => EXIT_OK,
             End::Stopped {
                 expected: false, ..
-            } => crate::EXIT_FAILURE,
+            } => EXIT_FAILURE,
         }
     }
 
@@ -384,37 +288,57 @@ impl fmt::Display for CccSummary {
     }
 }
 
-/// Runs the converter scenario of `opts` in scalar `T`: the state CSV to `csv`, the
-/// logs to `logs` (events, switches) when given. Every sink is flushed before
-/// returning, also when a step fails; a failed step is not an `Err` but the summary's
-/// [`End::Stopped`].
-pub fn simulate<T: Real>(
-    opts: &RunOptions,
-    csv: Sink<'_>,
-    logs: Option<(Sink<'_>, Sink<'_>)>,
-) -> Result<CccSummary, RunError> {
-    simulate_with::<T>(opts, csv, logs, None)
+/// The structomatic formula of the mode the twin of `s` starts from (I0, or free, in
+/// its first coordinate choice), in physical link numbers; `?` if it cannot build.
+pub fn start_formula(s: &CccScenario) -> String {
+    let params = s.converter.params::<f64>();
+    let mode = if s.clutch { Mode::I0 } else { Mode::Free };
+    let coords = mode.coordinate_choices()[0];
+    initial_pose(
+        &params,
+        s.converter.crank_deg.to_radians(),
+        s.converter.swing_deg.to_radians(),
+    )
+    .and_then(|pose| mode_model(&params, mode, coords, &pose).ok())
+    .map_or_else(
+        || "?".to_string(),
+        |(model, _)| format!("{} ({mode}, {coords})", model.formula()),
+    )
 }
 
-/// [`simulate`], feeding `rec` (the pictures' recorder) every written row and every
-/// state.
-pub fn simulate_with<T: Real>(
+/// The converter settings of `opts`: its scenario's, with the overrides `--motor`,
+/// `--load` and `--ccw`; `None` for a mechanism.
+pub fn settings(opts: &RunOptions) -> Option<CccScenario> {
+    let mut s = opts.scenario.converter()?;
+    if let Some(m) = opts.motor {
+        s.motor = MotorSpec::Constant(m);
+    }
+    if let Some(l) = opts.load {
+        s.load = l;
+    }
+    if opts.ccw {
+        s.drive = DriveDirection::Ccw;
+    }
+    Some(s)
+}
+
+/// Runs the converter scenario of `opts` in scalar `T`, telling `obs` every state, the
+/// state rows (at t = 0, every N-th step, and the last state) and the log lines (log 0:
+/// the events, log 1: the coordinate switches). [`Observer::on_end`] is called also
+/// when a step fails; a failed step is not an `Err` but the summary's
+/// [`End::Stopped`]. The summary's `logs` is left `None` (the caller knows where the
+/// logs went).
+pub fn simulate<T: Real>(
     opts: &RunOptions,
-    csv: Sink<'_>,
-    mut logs: Option<(Sink<'_>, Sink<'_>)>,
-    mut rec: Option<&mut Recorder>,
+    obs: &mut dyn Observer<T>,
 ) -> Result<CccSummary, RunError> {
     let precision = precision::<T>();
     let name = opts.scenario.name();
-    let settings = opts
-        .scenario
-        .converter()
-        .ok_or_else(|| {
-            RunError::Setup(format!(
-                "{name} is not a converter scenario: run it with host_sim::simulate"
-            ))
-        })?
-        .with_options(opts);
+    let settings = settings(opts).ok_or_else(|| {
+        RunError::Setup(format!(
+            "{name} is not a converter scenario: run it with host_sim::run::simulate"
+        ))
+    })?;
     let (Steps { t_end, n, .. }, h) = Steps::of::<T>(opts)?;
     let every = opts.every.max(1);
 
@@ -447,70 +371,61 @@ pub fn simulate_with<T: Real>(
     let mut switches = 0u64;
     let mut impacts = 0u64;
 
-    let Sink { w: out, target } = csv;
-    let csv_err = |error| RunError::Write {
-        target: target.clone(),
-        error,
-    };
-    writeln!(out, "{}", columns().join(",")).map_err(csv_err)?;
-    if let Some((ev, sw)) = logs.as_mut() {
-        writeln!(ev.w, "{}", EVENT_COLUMNS.join(",")).map_err(|e| ev.err(e))?;
-        writeln!(sw.w, "{}", SWITCH_COLUMNS.join(",")).map_err(|e| sw.err(e))?;
-    }
+    obs.on_start(&Tables {
+        columns: &columns(),
+        logs: &[&EVENT_COLUMNS, &SWITCH_COLUMNS],
+    })?;
     // The events of the setup (the start mode's choice) and of each step.
-    let mut record =
-        |twin: &Twin<T>, logs: &mut Option<(Sink<'_>, Sink<'_>)>| -> Result<(), RunError> {
-            for e in twin.events() {
-                if let Some(k) = EVENT_KINDS.iter().position(|k| *k == e.kind) {
-                    counts[k] += 1;
-                }
-                if e.impact_loss > T::zero() {
-                    impacts += 1;
-                }
-                let starts_shaft = !e.from.shaft_turning() && e.to.shaft_turning();
-                if starts_shaft && first_breakaway.is_none() {
-                    first_breakaway = Some((e.time.to_f64(), e.kind.name()));
-                }
-                if let Some((ev, _)) = logs.as_mut() {
-                    writeln!(
-                        ev.w,
-                        "{},{},{},{},{},{},{},{}",
-                        e.time,
-                        e.kind.name(),
-                        e.from.name(),
-                        e.to.name(),
-                        e.c[0],
-                        e.c[1],
-                        e.impact_loss,
-                        e.mismatch
-                    )
-                    .map_err(|e| ev.err(e))?;
-                }
+    let mut record = |twin: &Twin<T>, obs: &mut dyn Observer<T>| -> Result<(), RunError> {
+        for e in twin.events() {
+            if let Some(k) = EVENT_KINDS.iter().position(|k| *k == e.kind) {
+                counts[k] += 1;
             }
-            for s in twin.switches() {
-                switches += 1;
-                if let Some((_, sw)) = logs.as_mut() {
-                    writeln!(
-                        sw.w,
-                        "{},{},{},{},{},{}",
-                        s.time,
-                        s.mode.name(),
-                        s.from.name(),
-                        s.to.name(),
-                        s.conditioning[0],
-                        s.conditioning[1]
-                    )
-                    .map_err(|e| sw.err(e))?;
-                }
+            if e.impact_loss > T::zero() {
+                impacts += 1;
             }
-            Ok(())
-        };
-    record(&twin, &mut logs)?;
-    write_row(out, &twin).map_err(csv_err)?;
-    if let Some(r) = rec.as_deref_mut() {
-        r.converter_row(&twin);
-        r.converter_state(&twin);
-    }
+            let starts_shaft = !e.from.shaft_turning() && e.to.shaft_turning();
+            if starts_shaft && first_breakaway.is_none() {
+                first_breakaway = Some((e.time.to_f64(), e.kind.name()));
+            }
+            obs.on_event(
+                0,
+                &[
+                    Cell::Num(e.time),
+                    Cell::Text(e.kind.name()),
+                    Cell::Text(e.from.name()),
+                    Cell::Text(e.to.name()),
+                    Cell::Num(e.c[0]),
+                    Cell::Num(e.c[1]),
+                    Cell::Num(e.impact_loss),
+                    Cell::Num(e.mismatch),
+                ],
+            )?;
+        }
+        for s in twin.switches() {
+            switches += 1;
+            obs.on_event(
+                1,
+                &[
+                    Cell::Num(s.time),
+                    Cell::Text(s.mode.name()),
+                    Cell::Text(s.from.name()),
+                    Cell::Text(s.to.name()),
+                    Cell::Num(s.conditioning[0]),
+                    Cell::Num(s.conditioning[1]),
+                ],
+            )?;
+        }
+        Ok(())
+    };
+    let mut cells = Vec::new();
+    let mut write = |twin: &Twin<T>, obs: &mut dyn Observer<T>| {
+        row(twin, &mut cells);
+        obs.on_row(&cells)
+    };
+    record(&twin, obs)?;
+    write(&twin, obs)?;
+    obs.on_state(State::Converter(&twin));
     let mut rows = 1u64;
     let mut written = 0u64;
     let mut steps = 0u64;
@@ -526,36 +441,20 @@ pub fn simulate_with<T: Real>(
             break;
         }
         steps += 1;
-        record(&twin, &mut logs)?;
-        if let Some(r) = rec.as_deref_mut() {
-            r.converter_state(&twin);
-        }
+        record(&twin, obs)?;
+        obs.on_state(State::Converter(&twin));
         if steps % every == 0 || steps == n {
-            write_row(out, &twin).map_err(csv_err)?;
+            write(&twin, obs)?;
             rows += 1;
             written = steps;
-            if let Some(r) = rec.as_deref_mut() {
-                r.converter_row(&twin);
-            }
         }
     }
     if written != steps {
         // The last good state before a failed step.
-        write_row(out, &twin).map_err(csv_err)?;
+        write(&twin, obs)?;
         rows += 1;
-        if let Some(r) = rec {
-            r.converter_row(&twin);
-        }
     }
-    out.flush().map_err(csv_err)?;
-    let log_names = match logs.as_mut() {
-        Some((ev, sw)) => {
-            ev.w.flush().map_err(|e| ev.err(e))?;
-            sw.w.flush().map_err(|e| sw.err(e))?;
-            Some((ev.target.clone(), sw.target.clone()))
-        }
-        None => None,
-    };
+    obs.on_end()?;
     let wall = start.elapsed();
     let a = twin.audit();
     Ok(CccSummary {
@@ -567,7 +466,7 @@ pub fn simulate_with<T: Real>(
         steps,
         time: twin.time().to_f64(),
         rows,
-        logs: log_names,
+        logs: None,
         events: EVENT_KINDS
             .iter()
             .zip(counts)
@@ -593,161 +492,48 @@ pub fn simulate_with<T: Real>(
     })
 }
 
-/// Writes one state row (see [`columns`]), numbers in `{}` Display (shortest
-/// round-trip); cells past the mode's DOF are empty.
-pub fn write_row<T: Real>(w: &mut dyn Write, twin: &Twin<T>) -> io::Result<()> {
+/// The state row of `twin` into `cells` (see [`columns`]): cells past the mode's DOF
+/// are empty.
+fn row<T: Real>(twin: &Twin<T>, cells: &mut Vec<Cell<'static, T>>) {
+    cells.clear();
     let mode = twin.mode();
-    write!(
-        w,
-        "{},{},{},{}",
-        twin.time(),
-        mode.name(),
-        mode.code(),
-        twin.coordinates().name()
-    )?;
+    cells.extend([
+        Cell::Num(twin.time()),
+        Cell::Text(mode.name()),
+        Cell::Int(u64::from(mode.code())),
+        Cell::Text(twin.coordinates().name()),
+    ]);
     for v in [twin.q(), twin.qd()] {
         for j in 0..2 {
-            match v.get(j) {
-                Some(x) => write!(w, ",{x}")?,
-                None => w.write_all(b",")?,
-            }
+            cells.push(v.get(j).map_or(Cell::Empty, |x| Cell::Num(*x)));
         }
     }
-    for p in 1..=8 {
-        write!(w, ",{}", twin.link(p).theta)?;
-    }
-    for p in 1..=8 {
-        write!(w, ",{}", twin.link(p).omega)?;
-    }
+    cells.extend((1..=8).map(|p| Cell::Num(twin.link(p).theta)));
+    cells.extend((1..=8).map(|p| Cell::Num(twin.link(p).omega)));
     let [c6, c8] = twin.clutch_torques();
-    write!(
-        w,
-        ",{},{},{c6},{c8},{}",
-        twin.shaft_speed(),
-        twin.shaft_angle(),
-        twin.motor_torque()
-    )?;
-    for r in twin.joint_reactions() {
-        write!(w, ",{}", r.norm())?;
-    }
+    cells.extend(
+        [
+            twin.shaft_speed(),
+            twin.shaft_angle(),
+            c6,
+            c8,
+            twin.motor_torque(),
+        ]
+        .map(Cell::Num),
+    );
+    cells.extend(twin.joint_reactions().iter().map(|r| Cell::Num(r.norm())));
     let a = twin.audit();
-    writeln!(
-        w,
-        ",{},{},{},{},{},{}",
-        a.kinetic,
-        a.potential,
-        a.motor_work,
-        a.load_work,
-        a.impact_loss,
-        a.residual()
-    )
-}
-
-/// Runs `host-sim run ccc-*` with `opts`: the state CSV to the file (with the logs next
-/// to it) or `stdout` (no logs), the summary to the other stream (unless quiet), a
-/// failed step's error to `stderr`; returns the exit code.
-pub fn execute(opts: &RunOptions, stdout: &mut dyn Write, stderr: &mut dyn Write) -> u8 {
-    if let Err(e) = crate::pictures::check(opts) {
-        return crate::report_run_error(e, stderr);
-    }
-    let mut rec = Recorder::for_options(opts);
-    let result = match &opts.out {
-        Output::Stdout => dispatch(
-            opts,
-            Sink {
-                w: stdout,
-                target: "stdout".into(),
-            },
-            None,
-            rec.as_mut(),
-        )
-        .map(|s| (s, false)),
-        Output::File(path) => run_to_files_with(opts, path, rec.as_mut()).map(|s| (s, true)),
-    };
-    let result = result.and_then(|r| match &rec {
-        Some(rec) => crate::pictures::write(opts, rec).map(|_| r),
-        None => Ok(r),
-    });
-    match result {
-        Ok((summary, to_stdout)) => {
-            if !opts.quiet {
-                let to: &mut dyn Write = if to_stdout { stdout } else { stderr };
-                let _ = writeln!(to, "{summary}").and_then(|_| to.flush());
-            }
-            if let End::Stopped {
-                error,
-                expected: false,
-            } = &summary.end
-            {
-                let _ = writeln!(
-                    stderr,
-                    "host-sim: {}: step {} failed ({} rows written): {error}",
-                    opts.scenario.name(),
-                    summary.steps + 1,
-                    summary.rows
-                );
-            }
-            summary.exit_code()
-        }
-        Err(e) => crate::report_run_error(e, stderr),
-    }
-}
-
-/// Runs the converter scenario of `opts` with its state CSV to the file `path` and the
-/// logs next to it ([`log_paths`]).
-pub(crate) fn run_to_files(opts: &RunOptions, path: &Path) -> Result<CccSummary, RunError> {
-    run_to_files_with(opts, path, None)
-}
-
-/// [`run_to_files`] feeding the pictures' recorder.
-fn run_to_files_with(
-    opts: &RunOptions,
-    path: &Path,
-    rec: Option<&mut Recorder>,
-) -> Result<CccSummary, RunError> {
-    let (events, switches) = log_paths(path);
-    let create = |p: &Path| {
-        File::create(p)
-            .map(BufWriter::new)
-            .map_err(|error| RunError::Write {
-                target: p.display().to_string(),
-                error,
-            })
-    };
-    let mut csv = create(path)?;
-    let mut ev = create(&events)?;
-    let mut sw = create(&switches)?;
-    dispatch(
-        opts,
-        Sink {
-            w: &mut csv,
-            target: path.display().to_string(),
-        },
-        Some((
-            Sink {
-                w: &mut ev,
-                target: events.display().to_string(),
-            },
-            Sink {
-                w: &mut sw,
-                target: switches.display().to_string(),
-            },
-        )),
-        rec,
-    )
-}
-
-pub(crate) fn dispatch(
-    opts: &RunOptions,
-    csv: Sink<'_>,
-    logs: Option<(Sink<'_>, Sink<'_>)>,
-    rec: Option<&mut Recorder>,
-) -> Result<CccSummary, RunError> {
-    if opts.f32 {
-        simulate_with::<f32>(opts, csv, logs, rec)
-    } else {
-        simulate_with::<f64>(opts, csv, logs, rec)
-    }
+    cells.extend(
+        [
+            a.kinetic,
+            a.potential,
+            a.motor_work,
+            a.load_work,
+            a.impact_loss,
+            a.residual(),
+        ]
+        .map(Cell::Num),
+    );
 }
 
 #[cfg(test)]

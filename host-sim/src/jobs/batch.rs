@@ -1,15 +1,11 @@
 //! `host-sim batch`: the runs of a batch file, N at a time, with output files that do
 //! not depend on N.
 //!
-//! Two layers:
-//! - [`run_jobs`], a small reusable job runner: a slice of jobs on N scoped threads that
-//!   take the next job index from a shared counter; the results come back in job order,
-//!   and the caller's thread gets a [`Progress`] callback as each job finishes (a
-//!   progress bar needs nothing more). Parameter sweeps are meant to build on it.
-//! - the batch command: [`parse_batch`] checks every line of the file before anything
-//!   runs, [`run_one`] runs one line exactly as `host-sim run <line> --out FILE` would
-//!   (same code path, so the same bytes), [`write_table`] writes `batch.csv`, and
-//!   [`execute`] ties them together for the command line.
+//! On the worker pool ([`super::pool::run_jobs`]): [`parse_batch`] checks every line
+//! of the file before anything runs, [`run_one`] runs one line exactly as `host-sim run
+//! <line> --out FILE` would (the same pipeline, [`crate::run::run_to_file`], so the
+//! same bytes), [`write_table`] writes `batch.csv`, and [`execute`] ties them together
+//! for the command line.
 //!
 //! Why the files cannot depend on the thread count: each job builds its own model and
 //! workspace and writes only its own files (named by job index, not by finishing
@@ -17,88 +13,20 @@
 //! jobs finished, from the results gathered by job index. Only the progress lines on
 //! `stderr` come in finishing order.
 
-use crate::ccc::{self, CccSummary, End};
-use crate::cli::{parse_args, BatchOptions, Command, RunOptions, HINT};
-use crate::run::{RunError, Steps, Summary};
-use crate::scenarios::Source;
+use super::pool::run_jobs;
+use crate::error::{RunError, EXIT_FAILURE, EXIT_OK, EXIT_USAGE, HINT};
+use crate::model::scenarios::Source;
+use crate::options::args::parse_run_line;
+use crate::options::{BatchOptions, RunOptions, Steps};
+use crate::run::converter::{CccSummary, End};
+use crate::run::mechanism::Summary;
+use crate::run::{self, Report};
 use std::borrow::Cow;
 use std::fmt;
 use std::fs::{self, File};
 use std::io::{self, BufWriter, Write};
 use std::path::Path;
-use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::mpsc;
-use std::thread;
 use std::time::Instant;
-
-/// A finished job, as [`run_jobs`] reports it.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Progress {
-    /// The job's index in the slice.
-    pub job: usize,
-    /// Jobs finished so far, this one included (1..=`total`).
-    pub done: usize,
-    /// Jobs in all.
-    pub total: usize,
-}
-
-/// Runs `work(k, &jobs[k])` for every job on `threads` worker threads (at least 1, at
-/// most one per job) and returns the results in job order, whatever order they finish
-/// in. `progress` is called on the caller's thread once per job, as each one finishes
-/// (so it may hold non-`Send` state such as a terminal handle).
-///
-/// The workers take the next job index from a shared atomic counter, so a long job
-/// does not hold up the others; a result travels back to the caller with its index.
-/// A panic in `work` or `progress` is resumed on the caller's thread once every worker
-/// has stopped.
-pub fn run_jobs<J, R, W, P>(jobs: &[J], threads: usize, work: W, mut progress: P) -> Vec<R>
-where
-    J: Sync,
-    R: Send,
-    W: Fn(usize, &J) -> R + Sync,
-    P: FnMut(Progress, &R),
-{
-    let total = jobs.len();
-    let workers = threads.clamp(1, total.max(1));
-    let next = AtomicUsize::new(0);
-    let mut results: Vec<Option<R>> = (0..total).map(|_| None).collect();
-    thread::scope(|scope| {
-        let (tx, rx) = mpsc::channel();
-        for _ in 0..workers {
-            let tx = tx.clone();
-            let (next, work) = (&next, &work);
-            scope.spawn(move || loop {
-                // Relaxed is enough: the counter only hands out distinct indices; the
-                // results reach the caller through the channel, which synchronizes.
-                let k = next.fetch_add(1, Ordering::Relaxed);
-                let Some(job) = jobs.get(k) else { break };
-                if tx.send((k, work(k, job))).is_err() {
-                    // The caller stopped listening (its progress callback panicked).
-                    break;
-                }
-            });
-        }
-        // The workers hold the only senders left: the loop ends when they all stop.
-        drop(tx);
-        for (done, (job, result)) in rx.iter().enumerate() {
-            progress(
-                Progress {
-                    job,
-                    done: done + 1,
-                    total,
-                },
-                &result,
-            );
-            results[job] = Some(result);
-        }
-    });
-    // Every index below `total` was taken by exactly one worker, and a worker that
-    // panicked has made `thread::scope` panic above, so every slot is filled.
-    results
-        .into_iter()
-        .map(|r| r.expect("every job reported its result"))
-        .collect()
-}
 
 /// One run of a batch file.
 #[derive(Clone, Debug, PartialEq)]
@@ -175,14 +103,9 @@ fn parse_line(args: &[&str]) -> Result<RunOptions, String> {
             "{a}: not in a batch (draw a job's pictures with host-sim plot or run)"
         ));
     }
-    match parse_args(std::iter::once("run").chain(args.iter().copied())) {
-        Ok(Command::Run(opts)) => {
-            Steps::check(&opts).map_err(|e| e.to_string())?;
-            Ok(opts)
-        }
-        Ok(_) => Err("help is not a run".to_string()),
-        Err(e) => Err(e.0),
-    }
+    let opts = parse_run_line(args)?;
+    Steps::check(&opts).map_err(|e| e.to_string())?;
+    Ok(opts)
 }
 
 /// The CSV file name of job `job` of `total`: the index with at least 3 digits (as
@@ -210,7 +133,7 @@ impl Outcome {
     /// The exit status `host-sim run` gives for this run alone.
     pub fn exit_code(&self) -> u8 {
         match self {
-            Outcome::Mechanism(Ok(_)) => crate::EXIT_OK,
+            Outcome::Mechanism(Ok(_)) => EXIT_OK,
             Outcome::Converter(Ok(s)) => s.exit_code(),
             Outcome::Mechanism(Err(e)) | Outcome::Converter(Err(e)) => e.exit_code(),
         }
@@ -226,10 +149,7 @@ impl Outcome {
                 end: End::Completed,
                 ..
             })) => "completed",
-            Outcome::Converter(Ok(CccSummary {
-                end: End::Stopped { error, .. },
-                ..
-            })) if error.at_singularity() => "singularity",
+            Outcome::Converter(Ok(s)) if s.end.at_singularity() => "singularity",
             Outcome::Converter(Ok(_))
             | Outcome::Mechanism(Err(RunError::Step { .. } | RunError::Integrator { .. })) => {
                 "failed"
@@ -251,33 +171,31 @@ impl Outcome {
     }
 }
 
+impl Outcome {
+    /// The outcome of a run of `opts` that gave `r`.
+    pub fn of(opts: &RunOptions, r: Result<Report, RunError>) -> Outcome {
+        match r {
+            Ok(Report::Mechanism(s)) => Outcome::Mechanism(Ok(s)),
+            Ok(Report::Converter(s)) => Outcome::Converter(Ok(s)),
+            Err(e) if opts.scenario.is_converter() => Outcome::Converter(Err(e)),
+            Err(e) => Outcome::Mechanism(Err(e)),
+        }
+    }
+}
+
 /// Runs `opts` with its CSV to `csv` (and a converter's logs next to it): the code of
 /// `host-sim run --out`, without the printing.
 pub fn run_one(opts: &RunOptions, csv: &Path) -> Outcome {
-    if opts.scenario.is_converter() {
-        Outcome::Converter(ccc::run_to_files(opts, csv))
-    } else {
-        Outcome::Mechanism(crate::run_to_file(opts, csv))
-    }
+    Outcome::of(opts, run::run_to_file(opts, csv, None))
 }
 
-/// Runs `opts` writing nothing (the CSV and logs go to [`io::sink`]): the outcome
-/// only, as a parameter sweep needs it. The same code path as [`run_one`], so the same
-/// summary.
+/// Runs `opts` writing nothing: the outcome only, as a parameter sweep needs it. The
+/// same code path as [`run_one`], so the same summary.
 pub fn run_quiet(opts: &RunOptions) -> Outcome {
-    let mut csv = io::sink();
-    if opts.scenario.is_converter() {
-        let sink = ccc::Sink {
-            w: &mut csv,
-            target: "nowhere".into(),
-        };
-        Outcome::Converter(ccc::dispatch(opts, sink, None, None))
-    } else {
-        Outcome::Mechanism(crate::dispatch(opts, &mut csv, "nowhere", None))
-    }
+    Outcome::of(opts, run::run_quiet(opts))
 }
 
-/// The columns of `batch.csv` (described in `host-sim help`).
+/// The columns of `batch.csv` (described in `host-sim help batch`).
 pub const TABLE_COLUMNS: [&str; 15] = [
     "job",
     "line",
@@ -376,7 +294,7 @@ pub fn execute(opts: &BatchOptions, stdout: &mut dyn Write, stderr: &mut dyn Wri
         Ok(t) => t,
         Err(e) => {
             let _ = writeln!(stderr, "host-sim: cannot read batch file {file}: {e}");
-            return crate::EXIT_FAILURE;
+            return EXIT_FAILURE;
         }
     };
     let runs = match parse_batch(&text) {
@@ -385,7 +303,7 @@ pub fn execute(opts: &BatchOptions, stdout: &mut dyn Write, stderr: &mut dyn Wri
                 stderr,
                 "host-sim: batch file {file}: no runs (only blank lines and comments)\n{HINT}"
             );
-            return crate::EXIT_USAGE;
+            return EXIT_USAGE;
         }
         Ok(runs) => runs,
         Err(bad) => {
@@ -393,13 +311,13 @@ pub fn execute(opts: &BatchOptions, stdout: &mut dyn Write, stderr: &mut dyn Wri
                 let _ = writeln!(stderr, "host-sim: batch file {file} {b}");
             }
             let _ = writeln!(stderr, "nothing was run; {HINT}");
-            return crate::EXIT_USAGE;
+            return EXIT_USAGE;
         }
     };
     let dir = &opts.out_dir;
     if let Err(e) = fs::create_dir_all(dir) {
         let _ = writeln!(stderr, "host-sim: cannot create {}: {e}", dir.display());
-        return crate::EXIT_FAILURE;
+        return EXIT_FAILURE;
     }
     let total = runs.len();
     let start = Instant::now();
@@ -436,11 +354,11 @@ pub fn execute(opts: &BatchOptions, stdout: &mut dyn Write, stderr: &mut dyn Wri
     });
     if let Err(e) = written {
         let _ = writeln!(stderr, "host-sim: cannot write {}: {e}", table.display());
-        return crate::EXIT_FAILURE;
+        return EXIT_FAILURE;
     }
     let mut failed = 0;
     for (job, (run, outcome)) in runs.iter().zip(&outcomes).enumerate() {
-        if outcome.exit_code() != crate::EXIT_OK {
+        if outcome.exit_code() != EXIT_OK {
             failed += 1;
             let _ = writeln!(
                 stderr,
@@ -464,60 +382,15 @@ pub fn execute(opts: &BatchOptions, stdout: &mut dyn Write, stderr: &mut dyn Wri
         .and_then(|_| stdout.flush());
     }
     if failed == 0 {
-        crate::EXIT_OK
+        EXIT_OK
     } else {
-        crate::EXIT_FAILURE
+        EXIT_FAILURE
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use std::time::Duration;
-
-    // The results come back in job order although later jobs finish first, and the
-    // progress callback sees every job once.
-    #[test]
-    fn results_in_job_order_whatever_the_finishing_order() {
-        let jobs: Vec<u64> = (0..12).collect();
-        for threads in [1, 2, 3, 64] {
-            let mut seen = Vec::new();
-            let out = run_jobs(
-                &jobs,
-                threads,
-                |k, &j| {
-                    // The first job is by far the longest: with 2 threads or more,
-                    // the others finish while it runs.
-                    thread::sleep(Duration::from_millis(if j == 0 { 100 } else { 1 }));
-                    (k, j * j)
-                },
-                |p, r: &(usize, u64)| {
-                    assert_eq!(p.job, r.0);
-                    assert_eq!(p.total, 12);
-                    seen.push((p.done, p.job));
-                },
-            );
-            let want: Vec<(usize, u64)> = jobs.iter().map(|&j| (j as usize, j * j)).collect();
-            assert_eq!(out, want, "{threads} threads");
-            assert_eq!(
-                seen.iter().map(|s| s.0).collect::<Vec<_>>(),
-                (1..=12).collect::<Vec<_>>()
-            );
-            let mut order: Vec<usize> = seen.iter().map(|s| s.1).collect();
-            if threads > 1 {
-                // The long first job finished after a later one.
-                assert_ne!(order[0], 0, "{threads} threads: {order:?}");
-            }
-            order.sort_unstable();
-            assert_eq!(order, (0..12).collect::<Vec<_>>());
-        }
-    }
-
-    #[test]
-    fn no_jobs() {
-        let out: Vec<u8> = run_jobs(&[] as &[u8], 2, |_, &j| j, |_, _| panic!("no job"));
-        assert!(out.is_empty());
-    }
 
     #[test]
     fn batch_lines() {
@@ -556,7 +429,7 @@ run five-bar
             (4, "steps"),
             (5, "--ccw: ccc-s1"),
             (6, "help is not a run"),
-            (7, "unknown scenario 'run'"),
+            (7, "unexpected argument 'five-bar'"),
         ];
         assert_eq!(got.len(), want.len(), "{got:?}");
         for ((line, msg), (wl, wm)) in got.iter().zip(want) {
@@ -569,13 +442,13 @@ run five-bar
     // The example batch shipped with host-sim stays valid.
     #[test]
     fn example_batch_parses() {
-        let runs = parse_batch(include_str!("../batches/loads.batch")).unwrap();
+        let runs = parse_batch(include_str!("../../batches/loads.batch")).unwrap();
         assert!(runs.len() >= 4);
     }
 
     #[test]
     fn file_names_sort_in_job_order() {
-        use crate::ScenarioId;
+        use crate::model::scenarios::ScenarioId;
         let s = |id: ScenarioId| Source::from(id);
         assert_eq!(file_name(3, 10, &s(ScenarioId::CccS2)), "003-ccc-s2.csv");
         assert_eq!(

@@ -1,17 +1,18 @@
 //! The built-in scenarios by command-line name: the thesis's validation mechanisms of
 //! [`structomat::mechanisms`], and the Constantinesco converter's scenarios S1 and S2
-//! (SPEC 3, run on a [`structomat::ccc::Twin`] by [`crate::ccc`]).
+//! (SPEC 3, run on a [`structomat::ccc::Twin`] by [`crate::run::converter`]).
 //!
 //! Each ships as a run file, `host-sim/scenarios/<name>.toml`, embedded in the binary:
 //! a built-in name runs its file exactly as `host-sim run FILE.toml` would (the golden
 //! pins of `tests/golden.rs` show that the files describe the core's mechanisms bit
 //! for bit). [`Source`] is "a built-in or a file's contents", what every run takes.
 
-use crate::analysis::{self, BuildError};
-use crate::ccc::CccScenario;
-use crate::runfile::{parse_run_file, Body, FileError, RunFile};
+use super::analysis::{self, BuildError};
+use super::runfile::{parse_run_file, Body, Converter, FileError, MotorSpec, RunFile};
+use std::fmt;
 use std::path::Path;
 use std::sync::Arc;
+use structomat::ccc::DriveDirection;
 use structomat::mechanisms::Scenario;
 use structomat::Real;
 
@@ -73,7 +74,7 @@ impl ScenarioId {
         }
     }
 
-    /// Whether this is a converter scenario (run by [`crate::ccc`]).
+    /// Whether this is a converter scenario (run by [`crate::run::converter`]).
     pub fn is_converter(self) -> bool {
         matches!(self, ScenarioId::CccS1 | ScenarioId::CccS2)
     }
@@ -91,10 +92,10 @@ impl ScenarioId {
     /// The embedded text of the scenario's run file (`host-sim/scenarios/<name>.toml`).
     pub fn file_text(self) -> &'static str {
         match self {
-            ScenarioId::SliderCrank => include_str!("../scenarios/slider-crank.toml"),
-            ScenarioId::FiveBar => include_str!("../scenarios/five-bar.toml"),
-            ScenarioId::CccS1 => include_str!("../scenarios/ccc-s1.toml"),
-            ScenarioId::CccS2 => include_str!("../scenarios/ccc-s2.toml"),
+            ScenarioId::SliderCrank => include_str!("../../scenarios/slider-crank.toml"),
+            ScenarioId::FiveBar => include_str!("../../scenarios/five-bar.toml"),
+            ScenarioId::CccS1 => include_str!("../../scenarios/ccc-s1.toml"),
+            ScenarioId::CccS2 => include_str!("../../scenarios/ccc-s2.toml"),
         }
     }
 
@@ -223,7 +224,7 @@ impl Source {
         }
     }
 
-    /// Whether it describes the converter (run by [`crate::ccc`]).
+    /// Whether it describes the converter (run by [`crate::run::converter`]).
     pub fn is_converter(&self) -> bool {
         match self {
             Source::Builtin(id) => id.is_converter(),
@@ -256,10 +257,66 @@ impl Source {
         let file = self.run_file().map_err(|e| e.to_string())?;
         analysis::scenario(&file).map_err(|e| match e {
             BuildError::Converter => format!(
-                "{} is a converter scenario: run it with host_sim::ccc::simulate",
+                "{} is a converter scenario: run it with host_sim::run::simulate",
                 self.name()
             ),
             e => format!("cannot build {}: {e}", self.name()),
         })
+    }
+}
+
+/// A converter scenario's settings (SPEC 3), after the command-line overrides: its run
+/// file's `[converter]` and `[run]` ([`Converter`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct CccScenario {
+    /// `false`: free mode, no clutch (S1).
+    pub clutch: bool,
+    /// The motor on the crank (a constant torque, N·m, CCW positive, or a motor law).
+    pub motor: MotorSpec,
+    /// Load torque T_r on the shaft, N·m (≥ 0; no effect in free mode).
+    pub load: f64,
+    /// Which way the shaft turns.
+    pub drive: DriveDirection,
+    /// Default step, s.
+    pub h: f64,
+    /// Default simulated time, s.
+    pub t_end: f64,
+    /// The file's converter: every parameter and the initial state.
+    pub converter: Box<Converter>,
+}
+
+impl CccScenario {
+    /// The settings of a converter run file; `None` for a mechanism file.
+    pub fn from_file(file: &RunFile) -> Option<Self> {
+        let Body::Converter(c) = &file.body else {
+            return None;
+        };
+        Some(CccScenario {
+            clutch: c.clutch,
+            motor: c.motor,
+            load: c.load,
+            drive: c.params.drive,
+            h: file.run.h,
+            t_end: file.run.t_end,
+            converter: c.clone(),
+        })
+    }
+}
+
+impl fmt::Display for CccScenario {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if self.clutch {
+            let dir = match self.drive {
+                DriveDirection::Cw => "CW",
+                DriveDirection::Ccw => "CCW",
+            };
+            write!(
+                f,
+                "motor {}, T_r = {} N·m, shaft {dir}, from rest",
+                self.motor, self.load
+            )
+        } else {
+            write!(f, "free mode (no clutch), motor {}, from rest", self.motor)
+        }
     }
 }

@@ -1,11 +1,11 @@
 //! Mechanisms and runs from TOML files (issue 5): the file format, its parsing and its
 //! validation. Every key is described in `host-sim/scenarios/README.md` and in
-//! `host-sim help`.
+//! `host-sim help run`.
 //!
 //! Two kinds of file:
 //! - a **general mechanism**: top-level `name`, `description`, `gravity`, arrays of
 //!   tables `[[ground]]`, `[[link]]`, `[[joint]]`, `[[driver]]`, `[[load]]`, and `[run]`.
-//!   The host finds the motion-transmission sequence itself ([`crate::analysis`]).
+//!   The host finds the motion-transmission sequence itself ([`super::analysis`]).
 //! - the **converter**: `[converter]` (every field of [`CccParams`], with its eight bars
 //!   as `[[converter.link]]`) and `[run]` (mode, motor, load, steps).
 //!

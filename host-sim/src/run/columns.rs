@@ -1,7 +1,6 @@
 //! The CSV layout: which quantity each column holds, its name, and its value at the
 //! simulation's current state.
 
-use std::io::{self, Write};
 use structomat::kinetostatics::driving_torque;
 use structomat::model::Model;
 use structomat::structomat::JointKind;
@@ -121,11 +120,6 @@ impl Layout {
         }
     }
 
-    /// Writes the header row.
-    pub fn write_header(&self, w: &mut dyn Write) -> io::Result<()> {
-        writeln!(w, "{}", self.names.join(","))
-    }
-
     /// The value of `col` at the simulation's current state; the reaction columns read
     /// the last [`Simulation::kinetostatics`] call (make it at the current state).
     pub fn value<T: Real>(col: Column, sim: &Simulation<T>) -> T {
@@ -148,19 +142,5 @@ impl Layout {
             Column::Moment { group, joint } => reaction(group, joint).map_or(nan, |r| r.moment),
             Column::Drive { group } => driving_torque(sim.model(), ws, group).unwrap_or(nan),
         }
-    }
-
-    /// Writes one row at the simulation's current state (call
-    /// [`Simulation::kinetostatics`] first), numbers in `{}` Display (shortest
-    /// round-trip).
-    pub fn write_row<T: Real>(&self, w: &mut dyn Write, sim: &Simulation<T>) -> io::Result<()> {
-        for (k, col) in self.columns.iter().enumerate() {
-            let v = Self::value(*col, sim);
-            if k > 0 {
-                w.write_all(b",")?;
-            }
-            write!(w, "{v}")?;
-        }
-        w.write_all(b"\n")
     }
 }

@@ -1,109 +1,17 @@
-//! `host-sim run`: steps a scenario, writes the CSV, and gathers the summary.
+//! The mechanism runner: steps a mechanism's [`Simulation`], tells the observers every
+//! state and written row, and gathers the summary.
 
-use crate::cli::{RunOptions, UsageError};
-use crate::columns::Layout;
-use crate::pictures::Recorder;
-use crate::runfile::Integrator;
+use super::columns::Layout;
+use crate::error::RunError;
+use crate::model::runfile::Integrator;
+use crate::options::{precision, RunOptions, Steps};
+use crate::output::csv::{CsvWriter, Sink};
+use crate::output::{Cell, Observer, State, Tables};
 use std::fmt;
-use std::io::{self, Write};
 use std::time::{Duration, Instant};
 use structomat::integrator::{Adaptive, AdaptiveError, AdaptiveSettings};
 use structomat::structomat::GroupKind;
 use structomat::{Real, Simulation, StepError};
-
-/// The most steps a run may take (a guard against `--h 1e-300`).
-pub const MAX_STEPS: u64 = 1_000_000_000;
-
-/// Why a run failed.
-#[derive(Debug)]
-pub enum RunError {
-    /// The options are unusable (too many steps, a step that underflows in `f32`):
-    /// exit code 2.
-    Usage(UsageError),
-    /// The scenario could not be built or set up: exit code 1.
-    Setup(String),
-    /// A step (or the kinetostatics after it) failed; the rows before it were written:
-    /// exit code 1.
-    Step {
-        /// Steps completed before the failure.
-        steps: u64,
-        /// Whether the kinetostatics at the state after `steps` steps failed (else the
-        /// next step did).
-        kinetostatics: bool,
-        /// CSV data rows written (including the one at t = 0).
-        rows: u64,
-        /// The core's error (it names the group, the time and the cause).
-        error: StepError,
-    },
-    /// The adaptive integrator gave up between two output times (a step below its
-    /// smallest, too many steps or rejections); the rows before were written: exit
-    /// code 1.
-    Integrator {
-        /// Output intervals completed before the failure.
-        steps: u64,
-        /// CSV data rows written (including the one at t = 0).
-        rows: u64,
-        /// What the integrator reported.
-        error: String,
-    },
-    /// Writing the CSV failed: exit code 1.
-    Write {
-        /// The file's path, or `stdout`.
-        target: String,
-        /// The I/O error.
-        error: io::Error,
-    },
-}
-
-impl RunError {
-    /// The process exit code for this error: 2 for bad options, 1 otherwise.
-    pub fn exit_code(&self) -> u8 {
-        match self {
-            RunError::Usage(_) => crate::EXIT_USAGE,
-            _ => crate::EXIT_FAILURE,
-        }
-    }
-}
-
-impl fmt::Display for RunError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            RunError::Usage(e) => write!(f, "{e}"),
-            RunError::Setup(e) => f.write_str(e),
-            RunError::Step {
-                steps,
-                kinetostatics: false,
-                rows,
-                error,
-            } => {
-                write!(
-                    f,
-                    "step {} failed ({rows} rows written): {error}",
-                    steps + 1
-                )
-            }
-            RunError::Step {
-                steps,
-                kinetostatics: true,
-                rows,
-                error,
-            } => {
-                write!(
-                    f,
-                    "kinetostatics after step {steps} failed ({rows} rows written): {error}"
-                )
-            }
-            RunError::Integrator { steps, rows, error } => write!(
-                f,
-                "output interval {} failed ({rows} rows written): the adaptive integrator: {error}",
-                steps + 1
-            ),
-            RunError::Write { target, error } => write!(f, "cannot write {target}: {error}"),
-        }
-    }
-}
-
-impl std::error::Error for RunError {}
 
 /// The mean of a generalized speed over the second half of a run.
 #[derive(Clone, Debug, PartialEq)]
@@ -270,105 +178,14 @@ impl fmt::Display for Summary {
     }
 }
 
-/// `"f32"` or `"f64"`: the name of the scalar `T` in summaries and messages.
-pub(crate) fn precision<T: Real>() -> &'static str {
-    if core::mem::size_of::<T>() == 4 {
-        "f32"
-    } else {
-        "f64"
-    }
-}
-
-/// A run's fixed steps: its options' `--h` and `--t-end`, or else its scenario's.
-///
-/// [`Steps::of`] makes the checks every run makes before its first step, so that
-/// `host-sim batch` can reject a bad line before anything runs, with the same message
-/// `host-sim run` would give.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Steps {
-    /// Step size as given (or the scenario's), s, in `f64`.
-    pub h: f64,
-    /// Simulated time, s.
-    pub t_end: f64,
-    /// Number of steps ([`step_count`]).
-    pub n: u64,
-}
-
-impl Steps {
-    /// The steps of `opts` in scalar `T`, and the step size as a `T`. Errors: `--h` is
-    /// not a positive `T` (an `f32` underflow), or more than [`MAX_STEPS`] steps
-    /// ([`RunError::Usage`]); the scenario's defaults cannot be built
-    /// ([`RunError::Setup`]).
-    pub fn of<T: Real>(opts: &RunOptions) -> Result<(Steps, T), RunError> {
-        // The defaults as f64 (the f32 scenario's 0.01 s step is 0.0099999998 s).
-        let (h64, t_end) = match (opts.h, opts.t_end) {
-            (Some(h), Some(t)) => (h, t),
-            (h, t) => {
-                let (dh, dt) = opts.scenario.default_steps().map_err(|e| {
-                    RunError::Setup(format!("cannot read {}: {e}", opts.scenario.name()))
-                })?;
-                (h.unwrap_or(dh), t.unwrap_or(dt))
-            }
-        };
-        let h = T::c(h64);
-        if !(h.finite() && h > T::zero()) {
-            return Err(RunError::Usage(UsageError(format!(
-                "--h: {h64} s is not a positive {}",
-                precision::<T>()
-            ))));
-        }
-        // Counted with the f64 step as given (an f32 step of 0.01 is 0.0099999998).
-        let n = step_count(h64, t_end).map_err(RunError::Usage)?;
-        Ok((Steps { h: h64, t_end, n }, h))
-    }
-
-    /// The steps of `opts` in its own precision (`--f32` or `f64`).
-    pub fn check(opts: &RunOptions) -> Result<Steps, RunError> {
-        if opts.f32 {
-            Steps::of::<f32>(opts).map(|(s, _)| s)
-        } else {
-            Steps::of::<f64>(opts).map(|(s, _)| s)
-        }
-    }
-}
-
-/// Number of fixed steps of size `h` to reach `t_end`: `t_end / h` when that is an
-/// integer to 1e-9 relative, else rounded up; at least 1.
-pub fn step_count(h: f64, t_end: f64) -> Result<u64, UsageError> {
-    let r = t_end / h;
-    if !(r.is_finite() && r <= MAX_STEPS as f64) {
-        return Err(UsageError(format!(
-            "--t-end / --h: {t_end} s / {h} s is more than {MAX_STEPS} steps"
-        )));
-    }
-    let n = if (r - r.round()).abs() <= 1e-9 * r.max(1.0) {
-        r.round()
-    } else {
-        r.ceil()
-    };
-    Ok((n as u64).max(1))
-}
-
-/// Runs the mechanism scenario of `opts` in scalar `T`, writing the CSV to `csv`
-/// (`target` names it in errors). The CSV is flushed before returning, also on a step
-/// error. The scenario (a built-in's embedded run file or a file's contents) is built by
-/// the structomatic analysis of [`crate::analysis`]. A converter scenario is a
-/// [`RunError::Setup`]: [`crate::ccc::simulate`] runs those.
+/// Runs the mechanism scenario of `opts` in scalar `T`, telling `obs` its states and
+/// rows ([`Observer::on_end`] also on a step error, before the error is returned). The
+/// scenario (a built-in's embedded run file or a file's contents) is built by the
+/// structomatic analysis of [`crate::model::analysis`]. A converter scenario is a
+/// [`RunError::Setup`]: [`super::converter::simulate`] runs those.
 pub fn simulate<T: Real>(
     opts: &RunOptions,
-    csv: &mut dyn Write,
-    target: &str,
-) -> Result<Summary, RunError> {
-    simulate_with::<T>(opts, csv, target, None)
-}
-
-/// [`simulate`], feeding `rec` (the pictures' recorder) every written row and every
-/// state.
-pub fn simulate_with<T: Real>(
-    opts: &RunOptions,
-    csv: &mut dyn Write,
-    target: &str,
-    mut rec: Option<&mut Recorder>,
+    obs: &mut dyn Observer<T>,
 ) -> Result<Summary, RunError> {
     let precision = precision::<T>();
     let scenario = opts.scenario.build::<T>().map_err(RunError::Setup)?;
@@ -403,10 +220,6 @@ pub fn simulate_with<T: Real>(
         .is_some_and(|g| g.kind == GroupKind::MotorR);
     let e0 = sim.energy();
     let energy_start = (e0.kinetic.to_f64(), e0.potential.to_f64());
-    let write_err = |error| RunError::Write {
-        target: target.to_string(),
-        error,
-    };
 
     let start = Instant::now();
     let mut step_wall = Duration::ZERO;
@@ -426,7 +239,11 @@ pub fn simulate_with<T: Real>(
     };
     let (mut drive_work, mut power) = (0.0f64, drive_power(&sim));
     let half_h = 0.5 * h.to_f64();
-    layout.write_header(csv).map_err(write_err)?;
+    obs.on_start(&Tables {
+        columns: &layout.names,
+        logs: &[],
+    })?;
+    let mut row: Vec<Cell<'_, T>> = Vec::with_capacity(layout.columns.len());
     let mut steps = 0u64;
     let outcome = loop {
         // Kinetostatics at the current state (the one at `steps`).
@@ -447,15 +264,17 @@ pub fn simulate_with<T: Real>(
             count += 1;
             from.get_or_insert(sim.time().to_f64());
         }
-        if let Some(r) = rec.as_deref_mut() {
-            r.mechanism_state(&sim);
-        }
+        obs.on_state(State::Mechanism(&sim));
         if steps % every == 0 {
-            layout.write_row(csv, &sim).map_err(write_err)?;
+            row.clear();
+            row.extend(
+                layout
+                    .columns
+                    .iter()
+                    .map(|c| Cell::Num(Layout::value(*c, &sim))),
+            );
+            obs.on_row(&row)?;
             rows += 1;
-            if let Some(r) = rec.as_deref_mut() {
-                r.mechanism_row(&layout, &sim);
-            }
         }
         if steps == n {
             break Ok(());
@@ -483,7 +302,7 @@ pub fn simulate_with<T: Real>(
         power = p;
     };
     let wall = start.elapsed();
-    csv.flush().map_err(write_err)?;
+    obs.on_end()?;
     match outcome {
         Ok(()) => {}
         Err(Failure::Step {
@@ -532,7 +351,7 @@ pub fn simulate_with<T: Real>(
     })
 }
 
-/// Why the stepping loop of [`simulate_with`] stopped early.
+/// Why the stepping loop of [`simulate`] stopped early.
 enum Failure {
     /// The next step (or output interval) failed, or the kinetostatics at the current
     /// state did.
@@ -552,4 +371,15 @@ impl Failure {
             error,
         }
     }
+}
+
+/// [`simulate`] with the CSV to `csv` only (`target` names it in errors); the CSV is
+/// flushed before returning, also on a step error.
+pub fn simulate_csv<T: Real>(
+    opts: &RunOptions,
+    csv: &mut dyn std::io::Write,
+    target: &str,
+) -> Result<Summary, RunError> {
+    let mut w = CsvWriter::new(Sink::new(csv, target), Vec::new());
+    simulate::<T>(opts, &mut w)
 }

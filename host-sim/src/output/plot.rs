@@ -1,15 +1,18 @@
 //! The plots of a run: what the thesis plots, from a [`Table`] of the run's CSV
 //! columns. A run fills the table as it writes its rows (`host-sim run ... --plot DIR`,
-//! through [`crate::pictures::Recorder`]); `host-sim plot RUN.csv --out-dir DIR` reads it
+//! through [`super::pictures::Recorder`]); `host-sim plot RUN.csv --out-dir DIR` reads it
 //! back from the CSV (its header names the columns). Both draw the same figures.
 //!
 //! Converter runs (a `mode_code` column): crank angle and speed, motor torque, joint
 //! reactions, lever, shaft and rocker speeds, clutch torques, the mode over time,
 //! energy. Mechanism runs: coordinates, speeds, driving torques, reactions.
 
+use super::{Cell, Observer, Tables};
 use crate::draw::{panels, Color, Figure, Plot, Series, PALETTE};
+use crate::error::RunError;
 use std::path::{Path, PathBuf};
 use structomat::ccc::Mode;
+use structomat::Real;
 
 /// A run's numeric columns by CSV name (a cell that is not a number, such as the mode's
 /// name or an empty cell past a mode's DOF, is NaN).
@@ -53,12 +56,21 @@ impl Table {
             .map(|k| self.columns[k].as_slice())
     }
 
-    /// Reads a CSV written by `host-sim run`: a header, then rows of the same number
-    /// of cells. Errors name the line.
+    /// Reads a CSV written by `host-sim run` (the `csv` crate's reader): a header,
+    /// then rows of the same number of cells. Errors name the line.
     pub fn from_csv(text: &str) -> Result<Table, String> {
-        let mut lines = text.lines();
-        let header = lines.next().ok_or("empty file (no header)")?;
-        let names: Vec<String> = header.split(',').map(|s| s.trim().to_string()).collect();
+        let mut reader = ::csv::ReaderBuilder::new()
+            .has_headers(false)
+            .trim(::csv::Trim::All)
+            .flexible(true)
+            .from_reader(text.as_bytes());
+        let mut records = reader.records();
+        let line = |r: &::csv::StringRecord| r.position().map_or(0, |p| p.line());
+        let header = match records.next() {
+            Some(r) => r.map_err(|e| format!("line 1: {e}"))?,
+            None => return Err("empty file (no header)".to_string()),
+        };
+        let names: Vec<String> = header.iter().map(str::to_string).collect();
         if names.first().map(String::as_str) != Some("t") {
             return Err(format!(
                 "line 1: the header starts with '{}', not 't' (not a host-sim run CSV)",
@@ -67,19 +79,14 @@ impl Table {
         }
         let mut table = Table::new(names);
         let mut row = Vec::new();
-        for (k, line) in lines.enumerate() {
-            if line.is_empty() {
-                continue;
-            }
+        for record in records {
+            let record = record.map_err(|e| e.to_string())?;
             row.clear();
-            row.extend(
-                line.split(',')
-                    .map(|c| c.trim().parse::<f64>().unwrap_or(f64::NAN)),
-            );
+            row.extend(record.iter().map(|c| c.parse::<f64>().unwrap_or(f64::NAN)));
             if row.len() != table.names.len() {
                 return Err(format!(
                     "line {}: {} cells, the header has {}",
-                    k + 2,
+                    line(&record),
                     row.len(),
                     table.names.len()
                 ));
@@ -87,6 +94,18 @@ impl Table {
             table.push_row(&row);
         }
         Ok(table)
+    }
+}
+
+impl<T: Real> Observer<T> for Table {
+    fn on_start(&mut self, tables: &Tables<'_>) -> Result<(), RunError> {
+        *self = Table::new(tables.columns.to_vec());
+        Ok(())
+    }
+    fn on_row(&mut self, row: &[Cell<'_, T>]) -> Result<(), RunError> {
+        let values: Vec<f64> = row.iter().map(Cell::to_f64).collect();
+        self.push_row(&values);
+        Ok(())
     }
 }
 

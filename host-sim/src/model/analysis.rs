@@ -25,7 +25,7 @@
 //! [`structomat::Model`] whose [`Model::formula`] names the groups (so host and core
 //! agree on the names).
 
-use crate::runfile::{Body, JointKind, Mechanism, PointId, RunFile};
+use super::runfile::{Body, JointKind, Mechanism, PointId, RunFile};
 use std::fmt;
 use structomat::config::{MAX_DOF, MAX_GROUPS};
 use structomat::mechanisms::Scenario;
@@ -841,7 +841,7 @@ pub fn build_model<T: Real>(m: &Mechanism, a: &Analysis) -> Result<Model<T>, Mod
 /// Why a mechanism file cannot become a scenario.
 #[derive(Clone, Debug, PartialEq)]
 pub enum BuildError {
-    /// The file describes the converter (run by [`crate::ccc`]).
+    /// The file describes the converter (run by [`crate::run::converter`]).
     Converter,
     /// The analysis found no sequence.
     Analysis(AnalysisError),

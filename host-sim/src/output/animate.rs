@@ -10,23 +10,18 @@
 //! the run. Every frame is a [`Figure`] of the same structure, so one piece of code
 //! draws the PNG frames of the GIF and the animated SVG ([`crate::draw::svg::animated`]).
 
+use super::{Observer, State};
 use crate::draw::plot::decimate;
 use crate::draw::ticks::ticks;
 use crate::draw::{
     pt, raster, svg, Anchor, Color, DrawError, Figure, Format, Pt, Shape, Stroke, Text, TextSize,
     PALETTE,
 };
+use crate::options::AnimFormat;
 use std::path::Path;
 use structomat::ccc::{Clutch, Mode, Twin};
 use structomat::{Real, Simulation};
 
-/// Frames a second: the bounds of `--fps` (GIF delays are in 1/100 s, and browsers slow
-/// down delays under 2/100 s).
-pub const FPS_RANGE: (u32, u32) = (1, 50);
-/// The bounds of `--slow`.
-pub const SLOW_RANGE: (f64, f64) = (0.01, 1000.0);
-/// The most frames an animation may have.
-pub const MAX_FRAMES: u64 = 5000;
 /// Frame size, px.
 pub const FRAME_SIZE: (u32, u32) = (800, 600);
 
@@ -201,6 +196,15 @@ impl Frames {
             .iter()
             .map(|f| draw_frame(self, &view, f))
             .collect()
+    }
+}
+
+impl<T: Real> Observer<T> for Frames {
+    fn on_state(&mut self, state: State<'_, T>) {
+        match state {
+            State::Mechanism(sim) => self.mechanism(sim),
+            State::Converter(twin) => self.converter(twin),
+        }
     }
 }
 
@@ -536,34 +540,6 @@ fn draw_strip(f: &mut Figure, frames: &Frames, t: f64) {
         pt(x, bottom),
         Stroke::solid(Color::rgb(220, 0, 0), 2.0),
     );
-}
-
-/// An animation file's format.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum AnimFormat {
-    /// Animated SVG (SMIL).
-    Svg,
-    /// GIF.
-    Gif,
-}
-
-impl AnimFormat {
-    /// By the extension of `path`: `.svg` or `.gif`.
-    pub fn of(path: &Path) -> Result<AnimFormat, String> {
-        match path
-            .extension()
-            .and_then(|e| e.to_str())
-            .map(str::to_ascii_lowercase)
-            .as_deref()
-        {
-            Some("svg") => Ok(AnimFormat::Svg),
-            Some("gif") => Ok(AnimFormat::Gif),
-            _ => Err(format!(
-                "--animate: '{}' has no .svg or .gif extension",
-                path.display()
-            )),
-        }
-    }
 }
 
 /// Writes the animation of `frames` to `path` (`.svg` or `.gif`).

@@ -31,18 +31,17 @@
 //! element of an array (`link.2.mass` is the third `[[link]]`'s mass).
 //!
 //! Determinism: variants are numbered in grid order (the first axis outermost, the
-//! last fastest); each runs alone on its own model ([`crate::run_jobs`]) and the table
+//! last fastest); each runs alone on its own model ([`super::pool::run_jobs`]) and the table
 //! and pictures are written from the results in that order, after all have run. Only
 //! the progress bar on `stderr` depends on the finishing order.
 
-use crate::batch::{self, cell};
-use crate::cli::{RunOptions, HINT};
+use super::batch::{self, cell};
+use super::pool::run_jobs;
 use crate::draw;
-use crate::run::RunError;
-use crate::run::Steps;
-use crate::run_jobs;
-use crate::runfile::{self, set_dotted_in as set_dotted};
-use crate::scenarios::{ScenarioId, Source};
+use crate::error::{RunError, EXIT_FAILURE, EXIT_OK, EXIT_USAGE, HINT};
+use crate::model::runfile::{self, set_dotted_in as set_dotted};
+use crate::model::scenarios::{ScenarioId, Source};
+use crate::options::{ProgressStyle, RunOptions, Steps, SweepOptions, MAX_THREADS};
 use std::fmt;
 use std::fs::{self, File};
 use std::io::{self, BufWriter, IsTerminal, Write};
@@ -97,7 +96,7 @@ pub struct HeatSpec {
 }
 
 /// The outcomes of a variant that a heat-map can show: the numeric columns of
-/// `sweep.csv` (described in `host-sim help`).
+/// `sweep.csv` (described in `host-sim help sweep`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Metric {
     /// First breakaway, s: the first event that starts the held shaft.
@@ -437,6 +436,14 @@ pub fn progress_bar(done: usize, total: usize, elapsed: Duration) -> String {
     s
 }
 
+/// Redraws the progress bar in place: back to the line's start, the line cleared to its
+/// end (`\r` and the terminal's erase-in-line `ESC [ K`, so that a shorter line leaves
+/// no stale text of a longer one), then `line`; a line break after the last.
+pub fn redraw(w: &mut dyn Write, line: &str, last: bool) -> io::Result<()> {
+    write!(w, "\r\x1b[K{line}{}", if last { "\n" } else { "" })?;
+    w.flush()
+}
+
 /// `m:ss`, or `h:mm:ss` from an hour.
 fn clock(d: Duration) -> String {
     let s = d.as_secs();
@@ -569,11 +576,8 @@ pub fn parse_sweep(
         set_dotted(&mut base_tree, key, value.clone()).map_err(|e| err(format!("[set] {e}")))?;
     }
     if let Some(t) = file.threads {
-        if !(1..=crate::cli::MAX_THREADS).contains(&t) {
-            return Err(err(format!(
-                "threads = {t}: must be 1..={}",
-                crate::cli::MAX_THREADS
-            )));
+        if !(1..=MAX_THREADS).contains(&t) {
+            return Err(err(format!("threads = {t}: must be 1..={}", MAX_THREADS)));
         }
     }
     let mut axes: Vec<Axis> = Vec::with_capacity(file.axis.len());
@@ -671,36 +675,6 @@ pub fn parse_sweep(
     Ok(sweep)
 }
 
-/// How a sweep shows its progress on `stderr`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum ProgressStyle {
-    /// A bar redrawn in place (`\r`): for a terminal.
-    Bar,
-    /// A line at every tenth of the variants: for a log file or a pipe.
-    Lines,
-    /// Nothing.
-    None,
-    /// `Bar` when `stderr` is a terminal, else `Lines`.
-    Auto,
-}
-
-/// Options of `host-sim sweep`.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub struct SweepOptions {
-    /// The sweep file.
-    pub file: PathBuf,
-    /// Where the table and pictures go.
-    pub out_dir: PathBuf,
-    /// Runs at a time (`None`: the file's `threads`, else 2).
-    pub threads: Option<usize>,
-    /// The progress display.
-    pub progress: ProgressStyle,
-    /// Also write each variant's CSV and logs (as `host-sim batch` names them).
-    pub keep_runs: bool,
-    /// No progress, no closing summary.
-    pub quiet: bool,
-}
-
 /// The base run file's tree: a built-in scenario's embedded file, or a run file at a
 /// path relative to the sweep file's directory `dir`.
 fn load_base(base: &str, dir: &Path) -> Result<(Table, String), String> {
@@ -745,7 +719,7 @@ pub fn execute(opts: &SweepOptions, stdout: &mut dyn Write, stderr: &mut dyn Wri
         Ok(t) => t,
         Err(e) => {
             let _ = writeln!(stderr, "host-sim: cannot read sweep file {origin}: {e}");
-            return crate::EXIT_FAILURE;
+            return EXIT_FAILURE;
         }
     };
     let dir = opts.file.parent().unwrap_or(Path::new("."));
@@ -753,7 +727,7 @@ pub fn execute(opts: &SweepOptions, stdout: &mut dyn Write, stderr: &mut dyn Wri
         Ok(s) => s,
         Err(e) => {
             let _ = writeln!(stderr, "host-sim: {e}\nnothing was run; {HINT}");
-            return crate::EXIT_USAGE;
+            return EXIT_USAGE;
         }
     };
     let jobs = match prepare(&sweep) {
@@ -770,13 +744,13 @@ pub fn execute(opts: &SweepOptions, stdout: &mut dyn Write, stderr: &mut dyn Wri
                 );
             }
             let _ = writeln!(stderr, "nothing was run; {HINT}");
-            return crate::EXIT_USAGE;
+            return EXIT_USAGE;
         }
     };
     let out = &opts.out_dir;
     if let Err(e) = fs::create_dir_all(out) {
         let _ = writeln!(stderr, "host-sim: cannot create {}: {e}", out.display());
-        return crate::EXIT_FAILURE;
+        return EXIT_FAILURE;
     }
     let threads = opts.threads.or(sweep.threads).unwrap_or(2);
     let total = jobs.len();
@@ -804,9 +778,7 @@ pub fn execute(opts: &SweepOptions, stdout: &mut dyn Write, stderr: &mut dyn Wri
             let line = progress_bar(p.done, p.total, start.elapsed());
             match style {
                 ProgressStyle::Bar => {
-                    let end = if p.done == p.total { "\n" } else { "" };
-                    let _ = write!(stderr, "\r{line}{end}");
-                    let _ = stderr.flush();
+                    let _ = redraw(stderr, &line, p.done == p.total);
                 }
                 ProgressStyle::Lines if 10 * p.done / p.total > shown || p.done == p.total => {
                     shown = 10 * p.done / p.total;
@@ -826,7 +798,7 @@ pub fn execute(opts: &SweepOptions, stdout: &mut dyn Write, stderr: &mut dyn Wri
     });
     if let Err(e) = written {
         let _ = writeln!(stderr, "host-sim: cannot write {}: {e}", table.display());
-        return crate::EXIT_FAILURE;
+        return EXIT_FAILURE;
     }
     let mut pictures = Vec::new();
     for (n, spec) in sweep.heatmaps.iter().enumerate() {
@@ -842,14 +814,14 @@ pub fn execute(opts: &SweepOptions, stdout: &mut dyn Write, stderr: &mut dyn Wri
                 let path = out.join(format!("{stem}.{ext}"));
                 if let Err(e) = figure.write(&path) {
                     let _ = writeln!(stderr, "host-sim: {e}");
-                    return crate::EXIT_FAILURE;
+                    return EXIT_FAILURE;
                 }
             }
             pictures.push(out.join(format!("{stem}.svg")));
         }
     }
     let failed: Vec<usize> = (0..runs.len())
-        .filter(|&k| runs[k].exit != crate::EXIT_OK)
+        .filter(|&k| runs[k].exit != EXIT_OK)
         .collect();
     for &k in &failed {
         let _ = writeln!(
@@ -871,7 +843,7 @@ pub fn execute(opts: &SweepOptions, stdout: &mut dyn Write, stderr: &mut dyn Wri
             &pictures,
         );
     }
-    crate::EXIT_OK
+    EXIT_OK
 }
 
 /// Every variant's run options, from its run file; errors: every bad variant, named by
@@ -1092,6 +1064,60 @@ mod tests {
         assert!(s.contains("[########################] 40/40 100%  1:02:05 elapsed"));
         assert!(!s.contains("left"));
         assert!(progress_bar(0, 0, Duration::ZERO).contains("0/1"));
+    }
+
+    /// What a terminal shows of `bytes` on its last line: printable characters
+    /// overwrite at the cursor, `\r` returns it to the start, `ESC [ K` erases from it
+    /// to the end, `\n` starts a new line.
+    fn screen(bytes: &[u8]) -> String {
+        let text = std::str::from_utf8(bytes).unwrap();
+        let (mut line, mut cursor): (Vec<char>, usize) = (Vec::new(), 0);
+        let mut chars = text.chars().peekable();
+        while let Some(c) = chars.next() {
+            match c {
+                '\r' => cursor = 0,
+                '\n' => {
+                    line.clear();
+                    cursor = 0;
+                }
+                '\x1b' => {
+                    assert_eq!(chars.next(), Some('['));
+                    assert_eq!(chars.next(), Some('K'));
+                    line.truncate(cursor);
+                }
+                c => {
+                    if cursor < line.len() {
+                        line[cursor] = c;
+                    } else {
+                        line.push(c);
+                    }
+                    cursor += 1;
+                }
+            }
+        }
+        line.into_iter().collect()
+    }
+
+    // The bar's last redraw is shorter (no estimate left): it must not leave the end of
+    // the one before on the line.
+    #[test]
+    fn progress_bar_redraw_clears_the_line() {
+        let long = progress_bar(1, 2, Duration::from_secs(30));
+        let short = progress_bar(2, 2, Duration::from_secs(60));
+        assert!(short.len() < long.len(), "{long:?} {short:?}");
+        let mut w = Vec::new();
+        redraw(&mut w, &long, false).unwrap();
+        assert_eq!(screen(&w), long);
+        let mut before_last = w.clone();
+        redraw(&mut w, &short, false).unwrap();
+        assert_eq!(screen(&w), short);
+        assert_eq!(w, format!("\r\x1b[K{long}\r\x1b[K{short}").into_bytes());
+        // The emulator sees stale text where the line is not cleared.
+        before_last.extend(format!("\r{short}").bytes());
+        assert_ne!(screen(&before_last), short);
+        let mut w = Vec::new();
+        redraw(&mut w, &short, true).unwrap();
+        assert!(w.ends_with(b"\n"));
     }
 
     fn base(name: &str) -> Result<(Table, String), String> {

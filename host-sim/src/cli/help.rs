@@ -1,0 +1,144 @@
+//! The reference texts of `host-sim help` and of each command's `--help`, below the
+//! options clap lists.
+
+/// What `host-sim --help` says first.
+pub const ABOUT_LONG: &str = "\
+host-sim: simulate the built-in mechanisms of the structomat core, or mechanisms and
+the Constantinesco converter described in run files (TOML)";
+
+/// After the commands in `host-sim --help`: the scenarios, the examples, the exit
+/// status.
+pub const TOP: &str = "\
+Scenarios: slider-crank, five-bar (mechanisms);
+           ccc-s1, ccc-s2 (the Constantinesco torque converter, SPEC 3)
+  Each ships as a run file, host-sim/scenarios/<name>.toml (embedded): copy one to
+  start your own.
+Examples: host-sim/mechanisms/*.toml (run files), host-sim/sweeps/*.toml (sweep
+  files), host-sim/batches/*.batch (batch files).
+
+Exit status: 0 success, 1 run failure (step error, file error), 2 bad arguments or a
+bad run file.
+
+Each command's options and reference: host-sim help <COMMAND> (or <COMMAND> --help).";
+
+/// After the options in `host-sim run --help`: the CSV columns, the converter's files
+/// and the run files' keys.
+pub const RUN: &str = "\
+CSV columns (one row at t = 0, then one per written step):
+  t                  time, s
+  q{j} qd{j} qdd{j}  coordinate j (1-based), its rate and acceleration
+  motor_torque{j}    applied torque (N·m) or force (N) of the drive on coordinate j
+  then, for every group of the sequence and every joint of the group (kinetostatics):
+  R{i}_{j}           revolute joint between bodies i and j (0 = ground): |reaction|, N
+  N{i}_{j} M{i}_{j}  prismatic joint: |normal force|, N, and reaction moment, N·m
+  drive_torque{j}    driving torque (force) the motion requires on coordinate j
+  A repeated name gets a suffix _2, _3, ...
+
+Converter scenarios (ccc-s1: free mode, h = 1e-4 s, t_end = 1 s; ccc-s2: h = 1e-4 s,
+t_end = 1 s): a row at t = 0, every N-th step and the last state, columns
+  t mode mode_code coords       time, s; mode name (free I0 I6 I8 jam A6 A8 A68), its
+                                code 0..7 in that order, the independent coordinates
+  q1 q2 qd1 qd2                 coordinates (rad) and speeds (rad/s); empty past the
+                                mode's DOF (q2 in 1-DOF modes, all four in jam)
+  theta{p} omega{p}             angle (rad, unwrapped) and speed (rad/s) of link p = 1..8
+  shaft_speed shaft_angle       output shaft, rad/s and rad turned, CCW positive
+  c6 c8                         torque each clutch transmits, N·m, + in drive direction
+  motor_torque                  motor torque on the crank, N·m
+  R_A R_B R_C R_E R_F R_D5 R_D7 R_G R_I R_H6 R_H8   |joint reaction|, N
+  kinetic potential             energy now, J
+  motor_work load_work impact_loss audit_residual   energy audit since t = 0, J
+  With --out FILE, the mode changes go to FILE's stem + .events.csv (time, event,
+  from, to, c6, c8, impact_loss, mismatch; the first row is the start event, except in
+  free mode, which has no mode choice) and the coordinate switches to stem +
+  .switches.csv (time, mode, from, to, conditioning_before, conditioning_after); with
+  the CSV on stdout these two logs are not written.
+  The summary gives the first breakaway, the events by kind, the coordinate switches,
+  the energy audit and how the run ended; it is printed also when a step fails.
+  ccc-s1 ending at the mechanism's singularity is its expected end: exit status 0.
+
+Run files (TOML; the full reference with every key: host-sim/scenarios/README.md).
+  SI units (m, kg, kg·m², s, N, N·m, rad/s); angles in degrees in keys ending in _deg,
+  motor speeds in rpm in keys ending in _rpm. Unknown keys are errors; every value is
+  checked before the first step; an error names the file, the line:column when the
+  toml parser knows it, and the field, e.g.  my.toml: link \"coupler\".mass: must be >= 0
+  A mechanism:
+    name, description, gravity = [gx, gy] (m/s², default [0, -9.81])
+    [[ground]]  name, at = [x, y]
+    [[link]]    name, mass, inertia (about the COG), length (a bar: points start, end)
+                or none (a block: point origin), points = { D = [x, y], ... } (link
+                frame), cog = distance along the bar or [x, y] (default: the midpoint),
+                angle_deg (the initial guess of the link's angle: picks the branch)
+    [[joint]]   name, type = \"revolute\", points = [\"A\", \"crank.start\"]
+                or type = \"prismatic\", slider = \"slider.origin\", guide = \"A\",
+                guide_angle_deg, slider_angle_deg, offset (the guess along the guide, m)
+                A point is a ground point's name or link.point (start, end, origin, a
+                named point, or an index).
+    [[driver]]  link, joint (the motor element: link about/along joint; coordinates
+                q1, q2, ... in driver order), q0_deg (revolute) or q0 (prismatic, m),
+                qd0, offset_deg, motor
+    [[load]]    link, at = [x, y] (link frame), force = [fx, fy] (N), moment (N·m)
+    The motion-transmission sequence is found by `host-sim analyze`'s search.
+  The converter: [converter] a, f, h (pivots A, F and shaft H), [[converter.link]] x 8
+    (length, mass, inertia), rocker_d, mass, mass_inertia, mass_at, shaft_inertia,
+    drive = \"cw\"|\"ccw\", gravity, branch_c, branch_g, branch_i = \"left\"|\"right\",
+    crank_deg, swing_deg, crank_speed, swing_speed
+  [run] h, t_end (s), every, f32, integrator = \"dp5\" (the fixed-step Dormand-Prince,
+    step h; the default) or \"adaptive\" (the adaptive DP5(4) between output times h
+    apart, with rtol, atol (default 1e-9 each) and h_max (default 10 h); mechanisms
+    only: the twin steps with a fixed h); converter only: mode =
+    \"clutch\"|\"free\", motor, load (T_r, N·m)
+  motor = a torque in N·m, or { type = \"constant\", torque }, { type = \"asynchronous\",
+    breakdown_rpm, breakdown_torque, rated_rpm, rated_torque, synchronous_rpm },
+    { type = \"polynomial\", a, b, c } (T = a + b ω + c ω², ω in rad/s)";
+
+/// After the options in `host-sim batch --help`: the batch file and the files written.
+pub const BATCH: &str = "\
+Batch files:
+  FILE lists one run a line, written like the arguments of run, e.g.
+    ccc-s2 --load 600 --motor 10 --t-end 0.3
+  without --out (the batch names the files); '#' starts a comment, blank lines are
+  skipped. Every line is checked before anything runs: a bad line is an error naming
+  its line number (exit status 2).
+  Files, for job k (0, 1, ... in line order, written with at least 3 digits):
+  k-<scenario>.csv, and for the converter scenarios k-<scenario>.events.csv and
+  .switches.csv: byte for byte what `host-sim run <line> --out k-<scenario>.csv` writes.
+  batch.csv, one row per job in job order, columns
+  job line scenario args file   job index, its line in FILE, the scenario, the
+                                line's arguments, the job's CSV file name
+  exit end                      the exit status the run alone gives; how it ended:
+                                completed, singularity (at a singularity of the
+                                mechanism: ccc-s1's expected end, or the diode's rods
+                                and levers in line), failed (a step failed otherwise)
+                                or error (setup, file)
+  steps time rows               steps completed, time of the last state, s (empty when a
+                                mechanism's step failed), CSV data rows
+  first_breakaway events switches audit_residual
+                                converter runs: first breakaway, s (empty if none),
+                                events, coordinate switches, energy audit residual, J
+  message                       the error of a run that did not complete
+  Exit status: 0 when every run succeeded (exit status 0 alone), 1 otherwise.";
+
+/// After the options in `host-sim sweep --help`: the sweep file and the files written.
+pub const SWEEP: &str = "\
+Sweep (host-sim sweep FILE --out-dir DIR): every combination of the axes' values of a
+base run, N at a time; example: host-sim/sweeps/mass-motor.toml
+  base = \"ccc-s2\"     a built-in scenario, or a run file (path relative to FILE)
+  threads = N         runs at a time (default 2; --threads overrides it)
+  [set]               fixed changes to the base: \"run.t_end\" = 0.3, ...
+  [[axis]]            key = \"converter.mass\" (a dotted key of the run file; a number
+                      picks an array element: \"converter.link.2.mass\"), label, and
+                      values = [..] or from, to, steps (evenly spaced, ends included)
+  [[heatmap]]         metric (a numeric column below), x, y (axis keys; default: the
+                      first two numeric axes); default: first_breakaway
+  Every variant is checked as a run file before anything runs (exit status 2 on a
+  bad one, named by its number and axis values). Variants are numbered in grid order
+  (the first axis outermost); the files do not depend on --threads.
+  --out-dir DIR      where the files go (created if missing)
+  --threads N        runs at a time, on N threads
+  --progress STYLE   bar (redrawn in place), lines (one per tenth) or none; default:
+    impact_loss, message  (empty where it does not apply);
+  heatmap<n>-<metric>.svg and .png per [[heatmap]] (with -<k> per combination of the
+  other axes' values). The summary gives the lowest and highest value of each
+  heat-map's metric and the variant that gave it. A variant that fails is a row
+  (end = singularity or failed, as in batch.csv), not a failure of the sweep: exit
+  status 0 when the files are written.";

@@ -1,0 +1,475 @@
+//! The command-line arguments of `run`, `batch`, `sweep`, `plot` and `analyze` (clap's
+//! derive API) and their checks, which turn them into the options of [`super`]. The
+//! values are taken as text and checked here, so that an error names the option and
+//! says what it expects in this crate's words (`--h: -1 is not positive (a positive
+//! number of seconds expected)`); clap refuses unknown, misspelled (with a suggestion)
+//! and repeated options.
+
+use super::{
+    AnimFormat, BatchOptions, Output, PlotOptions, ProgressStyle, RunOptions, SweepOptions,
+    DEFAULT_FPS, DEFAULT_SLOW, FPS_RANGE, MAX_THREADS, SLOW_RANGE,
+};
+use crate::error::{usage_err, UsageError};
+use crate::model::scenarios::{ScenarioId, Source};
+use clap::{Args, Parser};
+use std::path::PathBuf;
+
+/// The help's heading of the pictures' options.
+const PICTURES: &str = "Pictures";
+/// The help's heading of the converter's options.
+const CONVERTER: &str = "Converter scenarios";
+
+/// The arguments of `host-sim run` (and of a batch file's line).
+#[derive(Args, Clone, Debug, Default, PartialEq)]
+pub struct RunArgs {
+    /// A built-in scenario (slider-crank, five-bar, ccc-s1, ccc-s2) or a run file
+    #[arg(value_name = "SCENARIO|FILE.toml")]
+    pub scenario: String,
+    /// Write the CSV to FILE, the summary to stdout; '-' or no --out: the CSV to stdout,
+    /// the summary to stderr
+    #[arg(long, value_name = "FILE|-")]
+    pub out: Option<String>,
+    /// Step size (default: the scenario's own); also spelled --step (-h is help)
+    #[arg(
+        long,
+        visible_alias = "step",
+        value_name = "SECONDS",
+        allow_negative_numbers = true
+    )]
+    pub h: Option<String>,
+    /// Simulated time (default: the scenario's own); runs ceil(t_end / h) fixed steps
+    #[arg(long, value_name = "SECONDS", allow_negative_numbers = true)]
+    pub t_end: Option<String>,
+    /// Write every N-th step (default: the file's, else 1); the row at t = 0 is always
+    /// written
+    #[arg(long, value_name = "N", allow_negative_numbers = true)]
+    pub every: Option<String>,
+    /// Run the core in single precision (default: the file's f32 key, else f64)
+    #[arg(long, conflicts_with = "f64")]
+    pub f32: bool,
+    /// Run the core in double precision
+    #[arg(long)]
+    pub f64: bool,
+    /// No summary
+    #[arg(long)]
+    pub quiet: bool,
+    /// Draw the run's plots into DIR (created if missing), each as .svg and .png
+    /// (converter: crank, motor_torque, reactions, speeds, clutch_torques, mode, energy;
+    /// mechanisms: coordinates, torques, reactions; the CSV's rows: --every thins them)
+    #[arg(long, value_name = "DIR", help_heading = PICTURES)]
+    pub plot: Option<String>,
+    /// Animate the mechanism: FILE.svg (animated SVG, plays in a browser) or FILE.gif;
+    /// may be given twice (one .svg, one .gif)
+    #[arg(long, value_name = "FILE", help_heading = PICTURES)]
+    pub animate: Vec<String>,
+    /// Frames a second of the animation, 1..=50 (default 25)
+    #[arg(long, value_name = "N", requires = "animate", help_heading = PICTURES)]
+    pub fps: Option<String>,
+    /// Slow motion: the animation lasts X times the simulated time, 0.01..=1000 (default
+    /// 1); frames are taken every 1/(fps·X) s of simulated time, at most 5000 of them
+    #[arg(long, value_name = "X", requires = "animate", help_heading = PICTURES)]
+    pub slow: Option<String>,
+    /// Constant motor torque on the crank, CCW positive (default 12)
+    #[arg(long, value_name = "N·M", allow_negative_numbers = true, help_heading = CONVERTER)]
+    pub motor: Option<String>,
+    /// ccc-s2: load torque T_r >= 0 on the shaft (default 800)
+    #[arg(long, value_name = "N·M", allow_negative_numbers = true, help_heading = CONVERTER)]
+    pub load: Option<String>,
+    /// ccc-s2: the shaft turns counter-clockwise (SPEC 3's CCW variant; default
+    /// clockwise); ccc-s1 runs in free mode, without clutches: no --load, no --ccw
+    #[arg(long, help_heading = CONVERTER)]
+    pub ccw: bool,
+}
+
+impl RunArgs {
+    /// The run's options: every value checked, the scenario read (a run file is parsed
+    /// and validated here, so that nothing runs half-configured and a batch checks its
+    /// files up front), the run file's `every` and `f32` unless the arguments give them.
+    pub fn options(&self) -> Result<RunOptions, UsageError> {
+        let scenario = parse_source("run", &self.scenario)?;
+        let out = self.out.as_deref().map_or(Ok(Output::Stdout), parse_out)?;
+        let seconds =
+            |name, v: &Option<String>| v.as_deref().map(|v| parse_seconds(name, v)).transpose();
+        let h = seconds("--h", &self.h)?;
+        let t_end = seconds("--t-end", &self.t_end)?;
+        let every = self.every.as_deref().map(parse_every).transpose()?;
+        let load = self.load.as_deref().map(parse_load).transpose()?;
+        let motor = self
+            .motor
+            .as_deref()
+            .map(|v| parse_torque("--motor", v))
+            .transpose()?;
+        let plot = self
+            .plot
+            .as_deref()
+            .map(|v| parse_path("--plot", v))
+            .transpose()?;
+        let mut animate = Vec::new();
+        for a in &self.animate {
+            let path = parse_animation(a, &animate)?;
+            animate.push(path);
+        }
+        let fps = self.fps.as_deref().map(parse_fps).transpose()?;
+        let slow = self.slow.as_deref().map(parse_slow).transpose()?;
+        check_converter_options(&scenario, self.ccw, load.is_some(), motor.is_some())?;
+        // The run file's own output settings, unless the arguments give them.
+        let file = scenario.run_file().ok();
+        let every = every.unwrap_or_else(|| file.as_ref().map_or(1, |f| f.run.every));
+        let single = match (self.f32, self.f64) {
+            (true, _) => Some(true),
+            (_, true) => Some(false),
+            _ => None,
+        };
+        let f32 = single.unwrap_or_else(|| file.is_some_and(|f| f.run.f32));
+        Ok(RunOptions {
+            scenario,
+            out,
+            h,
+            t_end,
+            every,
+            f32,
+            quiet: self.quiet,
+            ccw: self.ccw,
+            load,
+            motor,
+            plot,
+            animate,
+            fps: fps.unwrap_or(DEFAULT_FPS),
+            slow: slow.unwrap_or(DEFAULT_SLOW),
+        })
+    }
+}
+
+/// A batch file's line: the arguments of `host-sim run`, without the program name.
+#[derive(Parser, Debug)]
+#[command(name = "run", no_binary_name = true, disable_version_flag = true)]
+struct RunLine {
+    #[command(flatten)]
+    run: RunArgs,
+}
+
+/// Parses the arguments of one run (a batch file's line) as `host-sim run` does.
+/// Errors: the message `host-sim run` gives, on one line.
+pub fn parse_run_line(args: &[&str]) -> Result<RunOptions, String> {
+    match RunLine::try_parse_from(args) {
+        Ok(line) => line.run.options().map_err(|e| e.0),
+        Err(e) if e.kind() == clap::error::ErrorKind::DisplayHelp => {
+            Err("help is not a run".to_string())
+        }
+        Err(e) => Err(one_line(&e)),
+    }
+}
+
+/// A clap error on one line: its message and tips, without the usage and the pointer
+/// to `--help` (`unexpected argument '--tt-end' found; tip: a similar argument exists:
+/// '--t-end'`).
+pub fn one_line(e: &clap::Error) -> String {
+    let text = e.render().to_string();
+    text.lines()
+        .take_while(|l| !l.starts_with("Usage:"))
+        .map(|l| l.trim())
+        .filter(|l| !l.is_empty())
+        .map(|l| l.strip_prefix("error: ").unwrap_or(l))
+        .collect::<Vec<_>>()
+        .join("; ")
+}
+
+/// The arguments that `host-sim batch` and `host-sim sweep` share: where the files go,
+/// how many runs at a time, quiet.
+#[derive(Args, Clone, Debug, PartialEq)]
+pub struct JobArgs {
+    /// Where the files go (created if missing; files of the same names are replaced)
+    #[arg(long, value_name = "DIR")]
+    pub out_dir: String,
+    /// Runs at a time, on N threads (default 2, or a sweep file's threads); the files
+    /// are the same for any N
+    #[arg(long, value_name = "N")]
+    pub threads: Option<String>,
+    /// No progress, no closing summary
+    #[arg(long)]
+    pub quiet: bool,
+}
+
+impl JobArgs {
+    fn out_dir(&self) -> Result<PathBuf, UsageError> {
+        parse_path("--out-dir", &self.out_dir)
+    }
+
+    fn threads(&self) -> Result<Option<usize>, UsageError> {
+        self.threads.as_deref().map(parse_threads).transpose()
+    }
+}
+
+/// The arguments of `host-sim batch`.
+#[derive(Args, Clone, Debug, PartialEq)]
+pub struct BatchArgs {
+    /// The batch file: one run a line, written like the arguments of run
+    #[arg(value_name = "FILE")]
+    pub file: String,
+    /// The output and the threads.
+    #[command(flatten)]
+    pub jobs: JobArgs,
+}
+
+impl BatchArgs {
+    /// The checked options.
+    pub fn options(&self) -> Result<BatchOptions, UsageError> {
+        Ok(BatchOptions {
+            file: parse_path("batch", &self.file)?,
+            out_dir: self.jobs.out_dir()?,
+            threads: self.jobs.threads()?.unwrap_or(2),
+            quiet: self.jobs.quiet,
+        })
+    }
+}
+
+/// The arguments of `host-sim sweep`.
+#[derive(Args, Clone, Debug, PartialEq)]
+pub struct SweepArgs {
+    /// The sweep file (TOML): a base run, fixed changes, the axes, the heat-maps
+    #[arg(value_name = "FILE")]
+    pub file: String,
+    /// The output and the threads.
+    #[command(flatten)]
+    pub jobs: JobArgs,
+    /// bar (redrawn in place), lines (one per tenth) or none; default: bar on a
+    /// terminal, else lines
+    #[arg(long, value_name = "STYLE", value_parser = ["bar", "lines", "none"])]
+    pub progress: Option<String>,
+    /// Also write each variant's CSV and logs, named as by batch
+    #[arg(long)]
+    pub keep_runs: bool,
+}
+
+impl SweepArgs {
+    /// The checked options.
+    pub fn options(&self) -> Result<SweepOptions, UsageError> {
+        Ok(SweepOptions {
+            file: parse_path("sweep", &self.file)?,
+            out_dir: self.jobs.out_dir()?,
+            threads: self.jobs.threads()?,
+            progress: match self.progress.as_deref() {
+                Some("bar") => ProgressStyle::Bar,
+                Some("lines") => ProgressStyle::Lines,
+                Some(_) => ProgressStyle::None,
+                None => ProgressStyle::Auto,
+            },
+            keep_runs: self.keep_runs,
+            quiet: self.jobs.quiet,
+        })
+    }
+}
+
+/// The arguments of `host-sim plot`.
+#[derive(Args, Clone, Debug, PartialEq)]
+pub struct PlotArgs {
+    /// A CSV that host-sim run wrote
+    #[arg(value_name = "RUN.csv")]
+    pub csv: String,
+    /// Where the plots go (created if missing)
+    #[arg(long, value_name = "DIR")]
+    pub out_dir: String,
+}
+
+impl PlotArgs {
+    /// The checked options.
+    pub fn options(&self) -> Result<PlotOptions, UsageError> {
+        Ok(PlotOptions {
+            csv: parse_path("plot", &self.csv)?,
+            out_dir: parse_path("--out-dir", &self.out_dir)?,
+        })
+    }
+}
+
+/// The arguments of `host-sim analyze`.
+#[derive(Args, Clone, Debug, PartialEq)]
+pub struct AnalyzeArgs {
+    /// A run file or a built-in scenario
+    #[arg(value_name = "FILE.toml|SCENARIO")]
+    pub scenario: String,
+}
+
+impl AnalyzeArgs {
+    /// The scenario, read and validated.
+    pub fn source(&self) -> Result<Source, UsageError> {
+        parse_source("analyze", &self.scenario)
+    }
+}
+
+/// A scenario argument of `command`: a built-in name or a run file (read and validated
+/// here, so that nothing runs half-configured and a batch checks its files up front).
+fn parse_source(command: &str, arg: &str) -> Result<Source, UsageError> {
+    if ScenarioId::from_name(arg).is_none() && !arg.ends_with(".toml") {
+        return Err(usage_err(format!(
+            "{command}: unknown scenario '{arg}' (known: {}; or a run file FILE.toml)",
+            ScenarioId::names()
+        )));
+    }
+    Source::from_arg(arg).map_err(|e| usage_err(format!("{command}: {e}")))
+}
+
+/// A file or directory name: not empty.
+fn parse_path(name: &str, value: &str) -> Result<PathBuf, UsageError> {
+    if value.is_empty() {
+        return Err(usage_err(format!("{name}: empty file name")));
+    }
+    Ok(PathBuf::from(value))
+}
+
+/// An animation file: `.svg` or `.gif`, at most one of each.
+fn parse_animation(value: &str, given: &[PathBuf]) -> Result<PathBuf, UsageError> {
+    let path = parse_path("--animate", value)?;
+    let format = AnimFormat::of(&path).map_err(usage_err)?;
+    if given.iter().any(|p| AnimFormat::of(p) == Ok(format)) {
+        return Err(usage_err(format!(
+            "--animate: '{value}': one .svg and one .gif at most"
+        )));
+    }
+    Ok(path)
+}
+
+fn parse_fps(value: &str) -> Result<u32, UsageError> {
+    let (lo, hi) = FPS_RANGE;
+    let n: u32 = value.trim().parse().map_err(|_| {
+        usage_err(format!(
+            "--fps: '{value}' is not a whole number ({lo}..={hi} expected)"
+        ))
+    })?;
+    if !(lo..=hi).contains(&n) {
+        return Err(usage_err(format!(
+            "--fps: {n} is out of range ({lo}..={hi} frames a second)"
+        )));
+    }
+    Ok(n)
+}
+
+fn parse_slow(value: &str) -> Result<f64, UsageError> {
+    let (lo, hi) = SLOW_RANGE;
+    let what = format!("a slow-motion factor {lo}..={hi}");
+    let x = parse_finite("--slow", value, &what)?;
+    if !(lo..=hi).contains(&x) {
+        return Err(usage_err(format!(
+            "--slow: {value} is out of range ({what} expected)"
+        )));
+    }
+    Ok(x)
+}
+
+fn parse_threads(value: &str) -> Result<usize, UsageError> {
+    let what = format!("a whole number 1..={MAX_THREADS} expected");
+    let n: usize = value.trim().parse().map_err(|_| {
+        usage_err(format!(
+            "--threads: '{value}' is not a whole number ({what})"
+        ))
+    })?;
+    if !(1..=MAX_THREADS).contains(&n) {
+        return Err(usage_err(format!(
+            "--threads: {n} is out of range ({what})"
+        )));
+    }
+    Ok(n)
+}
+
+/// `--ccw`, `--load` and `--motor` apply to the converter scenarios only, and `--ccw`
+/// and `--load` not to `ccc-s1` (free mode: no clutch, no shaft load, no drive
+/// direction).
+fn check_converter_options(
+    scenario: &Source,
+    ccw: bool,
+    load: bool,
+    motor: bool,
+) -> Result<(), UsageError> {
+    let given = [("--ccw", ccw), ("--load", load), ("--motor", motor)];
+    if !scenario.is_converter() {
+        if let Some((name, _)) = given.iter().find(|(_, g)| *g) {
+            return Err(usage_err(format!(
+                "{name}: only for the converter scenarios ({}), not {}",
+                ScenarioId::CONVERTER.map(ScenarioId::name).join(", "),
+                scenario.name()
+            )));
+        }
+    }
+    if scenario.is_free_converter() {
+        if let Some((name, _)) = given[..2].iter().find(|(_, g)| *g) {
+            return Err(usage_err(format!(
+                "{name}: {} runs in free mode without clutches, so it has no shaft load \
+                 and no drive direction (use ccc-s2, or mode = \"clutch\" in a run file)",
+                scenario.name()
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// A number of `what` (for messages): finite.
+fn parse_finite(name: &str, value: &str, what: &str) -> Result<f64, UsageError> {
+    let x: f64 = value.trim().parse().map_err(|_| {
+        usage_err(format!(
+            "{name}: '{value}' is not a number ({what} expected)"
+        ))
+    })?;
+    if !x.is_finite() {
+        return Err(usage_err(format!(
+            "{name}: '{value}' is not finite ({what} expected)"
+        )));
+    }
+    Ok(x)
+}
+
+/// A torque in N·m: a finite number.
+fn parse_torque(name: &str, value: &str) -> Result<f64, UsageError> {
+    parse_finite(name, value, "a torque in N·m")
+}
+
+/// The load torque T_r in N·m: a finite number, not negative.
+fn parse_load(value: &str) -> Result<f64, UsageError> {
+    let what = "a load torque T_r >= 0 in N·m";
+    let x = parse_finite("--load", value, what)?;
+    if x < 0.0 {
+        return Err(usage_err(format!(
+            "--load: {value} is negative ({what} expected)"
+        )));
+    }
+    // -0 is 0.
+    Ok(x + 0.0)
+}
+
+fn parse_out(value: &str) -> Result<Output, UsageError> {
+    match value {
+        "" => Err(usage_err("--out: empty file name (use '-' for stdout)")),
+        "-" => Ok(Output::Stdout),
+        path => Ok(Output::File(PathBuf::from(path))),
+    }
+}
+
+/// A time in seconds: a finite number greater than zero.
+fn parse_seconds(name: &str, value: &str) -> Result<f64, UsageError> {
+    let x: f64 = value.trim().parse().map_err(|_| {
+        usage_err(format!(
+            "{name}: '{value}' is not a number (seconds expected)"
+        ))
+    })?;
+    if !x.is_finite() {
+        return Err(usage_err(format!(
+            "{name}: '{value}' is not finite (a positive number of seconds expected)"
+        )));
+    }
+    if x <= 0.0 {
+        return Err(usage_err(format!(
+            "{name}: {value} is not positive (a positive number of seconds expected)"
+        )));
+    }
+    Ok(x)
+}
+
+fn parse_every(value: &str) -> Result<u64, UsageError> {
+    let n: u64 = value.trim().parse().map_err(|_| {
+        usage_err(format!(
+            "--every: '{value}' is not a whole number (N >= 1 expected)"
+        ))
+    })?;
+    if n == 0 {
+        return Err(usage_err("--every: must be at least 1 (got 0)"));
+    }
+    Ok(n)
+}
