@@ -545,6 +545,7 @@ fn s2_runs_one_second_with_energy_audit_and_switches() {
         "speeds jump at a switch: {:.3e}",
         r.worst_speed_gap
     );
+    // regression value: S2's second takes 3 or more coordinate switches.
     assert!(
         r.switches >= 3,
         "the crank's dead points need coordinate switches: {}",
@@ -567,6 +568,7 @@ fn s2_runs_one_second_with_energy_audit_and_switches() {
         .iter()
         .filter(|e| !e.from.shaft_turning() && e.to.shaft_turning())
         .count();
+    // regression value: S2 at h = 1e-4 s starts the shaft 3 or more times.
     assert!(starts >= 3, "shaft starts: {starts}");
     let last = r.events.last().expect("events");
     assert_eq!(last.to, Mode::Jam, "{last:?}");
@@ -623,6 +625,7 @@ fn s2_events_converge_with_the_step() {
     let (ka, kb) = (key(&a), key(&b));
     assert_eq!(ka.len(), kb.len(), "{ka:?} vs {kb:?}");
     let n = ka.len();
+    // regression value: S2's second has 20 or more events at both steps.
     assert!(n >= 20, "too few events to compare: {ka:?}");
     for (x, y) in ka.iter().zip(kb.iter()).take(n) {
         assert_eq!(
@@ -772,6 +775,7 @@ fn no_load_does_not_chatter() {
     for e in &r.events[1..] {
         assert_ne!(e.from, e.to, "an event that keeps the mode: {e:?}");
     }
+    // regression value: the unloaded run has fewer than 20 events in 0.2 s.
     assert!(r.events.len() < 20, "{} events in 0.2 s", r.events.len());
     assert!(r.max_rel_residual < 1e-6, "{:.3e}", r.max_rel_residual);
     r.oracles.assert_within(1e-4, 2e-5);

@@ -1,4 +1,5 @@
 #![no_std]
+#![warn(missing_docs)]
 //! # structomat
 //!
 //! Real-time dynamics of planar linkages by *structomats* (Assur groups), transmission
