@@ -216,6 +216,8 @@ struct Oracles {
     turning_sum: f64,
     /// Largest joint displacement between jam steps, m.
     jam_motion: f64,
+    /// The moments' balance in jam (statics), as `moment`.
+    jam_moment: f64,
     jam_states: usize,
 }
 
@@ -234,6 +236,7 @@ impl Oracles {
             held_sum: f64::NEG_INFINITY,
             turning_sum: 0.0,
             jam_motion: 0.0,
+            jam_moment: 0.0,
             jam_states: 0,
         }
     }
@@ -270,9 +273,14 @@ impl Oracles {
             for (lever, clutch) in [6usize, 8].into_iter().zip(mode.clutches()) {
                 match clutch {
                     Clutch::Locked => {
-                        let moved = (b.joints[lever][1] - a.joints[lever][1])
+                        // The pin (G or I) where the rod's assembly places its end, and
+                        // where the lever holds it: fixed, and the same point.
+                        let rod = lever - 1;
+                        let pin = |s: &Snapshot| s.joints[rod][1];
+                        let moved = (pin(b) - pin(a))
                             .norm()
-                            .max((c.joints[lever][1] - b.joints[lever][1]).norm());
+                            .max((pin(c) - pin(b)).norm())
+                            .max((b.joints[lever][1] - pin(b)).norm());
                         self.locked_pin = self.locked_pin.max(moved);
                     }
                     Clutch::Engaged => {
@@ -345,6 +353,11 @@ impl Oracles {
                 .max((sum_oracle - load).abs() / (1.0 + moment_scale));
         }
         if mode == Mode::Jam {
+            // Statics: at rest the motor's torque, gravity and the reactions alone
+            // balance (no inertia term is left in `moment`).
+            self.jam_moment = self
+                .jam_moment
+                .max((sum_oracle - sum).abs() / (1.0 + moment_scale));
             self.jam_states += 1;
             for k in 1..=8 {
                 for j in 0..2 {
@@ -376,6 +389,7 @@ impl Oracles {
         assert!(self.locked_pin <= 1e-12, "a locked pin moves: {self:?}");
         assert!(self.held_shaft == 0.0, "a held shaft turns: {self:?}");
         assert!(self.jam_motion <= 1e-12, "the jam moves: {self:?}");
+        assert!(self.jam_moment <= 1e-12, "jam's statics: {self:?}");
         // Overrunning: a free lever never outruns the shaft (beyond the differences'
         // error, rad/s).
         assert!(self.overrun <= bound, "a free lever outruns: {self:?}");

@@ -11,58 +11,43 @@
 // A build uses the levels its callers name, not necessarily all three.
 #![allow(unused_macros)]
 
-/// A debug-level record: forwards to `log::debug!` with the feature `log`.
+/// A record at `log`'s level `$level` (`debug`, `info`, `warn`): with the feature
+/// `log`, that macro of the `log` crate.
 #[cfg(feature = "log")]
+macro_rules! record {
+    ($level:ident, $($arg:tt)+) => { ::log::$level!($($arg)+) };
+}
+
+/// A record, type-checked and never formatted (no feature `log`): the branch is
+/// constant-false, so the arguments compile and nothing of them is linked.
+#[cfg(not(feature = "log"))]
+macro_rules! record {
+    ($level:ident, $($arg:tt)+) => {
+        if false {
+            let _ = ::core::format_args!($($arg)+);
+        }
+    };
+}
+
+/// A debug-level record (details of event location and of the mode choice).
 macro_rules! debug {
-    ($($arg:tt)+) => { ::log::debug!($($arg)+) };
+    ($($arg:tt)+) => { $crate::trace::record!(debug, $($arg)+) };
 }
 
-/// A debug-level record: type-checked, never formatted (no feature `log`).
-#[cfg(not(feature = "log"))]
-macro_rules! debug {
-    ($($arg:tt)+) => {
-        if false {
-            let _ = ::core::format_args!($($arg)+);
-        }
-    };
-}
-
-/// An info-level record: forwards to `log::info!` with the feature `log`.
-#[cfg(feature = "log")]
+/// An info-level record (mode changes, coordinate switches).
 macro_rules! info {
-    ($($arg:tt)+) => { ::log::info!($($arg)+) };
+    ($($arg:tt)+) => { $crate::trace::record!(info, $($arg)+) };
 }
 
-/// An info-level record: type-checked, never formatted (no feature `log`).
-#[cfg(not(feature = "log"))]
-macro_rules! info {
-    ($($arg:tt)+) => {
-        if false {
-            let _ = ::core::format_args!($($arg)+);
-        }
-    };
-}
-
-/// A warning record: forwards to `log::warn!` with the feature `log`.
-#[cfg(feature = "log")]
+/// A warning record (no consistent mode: the least violating one taken).
 macro_rules! warn_ {
-    ($($arg:tt)+) => { ::log::warn!($($arg)+) };
-}
-
-/// A warning record: type-checked, never formatted (no feature `log`).
-#[cfg(not(feature = "log"))]
-macro_rules! warn_ {
-    ($($arg:tt)+) => {
-        if false {
-            let _ = ::core::format_args!($($arg)+);
-        }
-    };
+    ($($arg:tt)+) => { $crate::trace::record!(warn, $($arg)+) };
 }
 
 // `warn` is also a built-in attribute: the macro is defined as `warn_` and exported
 // under its name, which a path (`trace::warn!`) reaches without ambiguity.
 #[allow(unused_imports)]
-pub(crate) use {debug, info, warn_ as warn};
+pub(crate) use {debug, info, record, warn_ as warn};
 
 #[cfg(test)]
 mod tests {
