@@ -23,6 +23,11 @@
 //! No heap, no panics on the step path, bounded iterations, `libm` math everywhere
 //! (bit-identical results on every platform), generic over `f64` and `f32`.
 //!
+//! Cargo feature `log` (off by default): the twin's diagnostic records (mode changes,
+//! coordinate switches, refused mode candidates) through the `log` crate's macros.
+//! Without it they compile to nothing: their arguments are type-checked, but no
+//! formatting code and no `log` is linked into the firmware.
+//!
 //! ```
 //! use structomat::mechanisms::five_bar;
 //! let scenario = five_bar::<f64>()?;
