@@ -372,7 +372,9 @@ impl Oracles {
 
     /// The bounds. What the twin holds exactly (a locked pin, a held shaft, jam at
     /// rest) must hold to round-off; the central differences' bounds scale with their
-    /// O(h⁴) truncation error, `fd` being the bound at h = 1e-4 s.
+    /// O(h⁴) truncation error, `fd` being the bound at h = 1e-4 s. Measured on S2 at
+    /// h = 1e-4 s: speeds 2.1e-6, power 4.0e-7, forces 1.0e-6, moments 5.5e-7; at
+    /// h = 5e-5 s each is 16 times smaller (truncation, not a mismatch).
     #[track_caller]
     fn assert_within(&self, h: f64, fd: f64) {
         eprintln!("oracles: {self:?}");
