@@ -5,13 +5,14 @@
 
 use structomat::ccc::{
     initial_pose, mode_model, CccParams, Clutch, Coordinates, DriveDirection, Event, EventKind,
-    Inputs, Mode, MotorInput, Twin, TwinError, TwinSettings,
+    Inputs, LinkState, Mode, MotorInput, Twin, TwinError, TwinSettings,
 };
 use structomat::kinematics::{assemble, position};
 use structomat::motor::Motor;
+use structomat::scalar::{cross, Vec2};
 use structomat::transmission::evaluate;
 use structomat::workspace::Workspace;
-use structomat_suite::{assert_close, central_diff4, pose};
+use structomat_suite::{assert_close, central_diff4, pose, unwrap_near};
 
 const T_R: f64 = 800.0;
 
@@ -33,15 +34,28 @@ struct Run {
     worst_gap: f64,
     worst_speed_gap: f64,
     final_kinetic: f64,
+    oracles: Oracles,
 }
 
 /// Runs the twin to `t_end` or its first error, checking SPEC 3's clutch laws at every
-/// step (`check_laws`).
+/// step (`check_laws`) and the outputs of every step inside a stretch without events
+/// against oracles independent of the twin's code (`Oracles::check`).
 fn run(
     params: CccParams<f64>,
     settings: TwinSettings<f64>,
     inputs: Inputs<f64>,
     t_end: f64,
+) -> Run {
+    run_until(params, settings, inputs, t_end, f64::INFINITY)
+}
+
+/// [`run`], checking the oracles on the states up to time `until` (s) only.
+fn run_until(
+    params: CccParams<f64>,
+    settings: TwinSettings<f64>,
+    inputs: Inputs<f64>,
+    t_end: f64,
+    until: f64,
 ) -> Run {
     let mut twin = Twin::new(params, settings, inputs).expect("the reference converter sets up");
     let mut out = Run {
@@ -53,7 +67,11 @@ fn run(
         worst_gap: 0.0,
         worst_speed_gap: 0.0,
         final_kinetic: 0.0,
+        oracles: Oracles::until(until),
     };
+    // The last five states, oldest first: the middle one is checked against
+    // 4th-order central differences over its neighbours.
+    let mut window: Vec<Snapshot> = vec![Snapshot::of(&twin, false)];
     let steps = (t_end / settings.h).round() as u64;
     for _ in 0..steps {
         if let Err(e) = twin.step(&inputs) {
@@ -61,6 +79,14 @@ fn run(
             break;
         }
         check_laws(&twin, inputs.load);
+        let quiet = twin.events().is_empty() && twin.switches().is_empty();
+        window.push(Snapshot::of(&twin, quiet));
+        if window.len() > 5 {
+            window.remove(0);
+        }
+        if let Ok(w) = <&[Snapshot; 5]>::try_from(&window[..]) {
+            out.oracles.check(twin.params(), inputs.load, settings.h, w);
+        }
         out.events.extend_from_slice(twin.events());
         out.switches += twin.switches().len();
         for s in twin.switches() {
@@ -83,15 +109,310 @@ fn run(
     out
 }
 
+/// What the oracles read of one state of the twin.
+#[derive(Clone)]
+struct Snapshot {
+    mode: Mode,
+    /// No event and no coordinate switch in the step that ended here.
+    quiet: bool,
+    links: [LinkState<f64>; 9],
+    /// Link angles measured from the joints the twin places (`joint_position`), rad.
+    angles: [f64; 9],
+    /// Joint positions `[first, second]` of every link, m.
+    joints: [[Vec2<f64>; 2]; 9],
+    shaft_angle: f64,
+    time: f64,
+    c: [f64; 2],
+    reactions: [Vec2<f64>; 11],
+    motor_torque: f64,
+}
+
+impl Snapshot {
+    fn of(twin: &Twin<f64>, quiet: bool) -> Self {
+        let mut links = [LinkState::default(); 9];
+        let mut angles = [0.0; 9];
+        let mut joints = [[Vec2::zeros(); 2]; 9];
+        for p in 1..=8 {
+            links[p] = twin.link(p);
+            joints[p] = [twin.joint_position(p, 0), twin.joint_position(p, 1)];
+            let d = joints[p][1] - joints[p][0];
+            angles[p] = d.y.atan2(d.x);
+        }
+        Snapshot {
+            mode: twin.mode(),
+            quiet,
+            links,
+            angles,
+            joints,
+            shaft_angle: twin.shaft_angle(),
+            time: twin.time(),
+            c: twin.clutch_torques(),
+            reactions: *twin.joint_reactions(),
+            motor_torque: twin.motor_torque(),
+        }
+    }
+}
+
+/// Bodies of the converter as the oracles see them: mass, own inertia about the COG,
+/// and the COG's distance along the link from its first joint; the oscillating mass
+/// rides on the rocker (link 3).
+fn bodies(p: &CccParams<f64>) -> Vec<(usize, f64, f64, f64)> {
+    let mut b: Vec<_> = (1..=8)
+        .map(|k| {
+            let bar = p.link(k);
+            (k, bar.mass, bar.inertia, 0.5 * bar.length)
+        })
+        .collect();
+    b.push((3, p.mass, p.mass_inertia, p.mass_at));
+    b
+}
+
+/// A body's COG position and velocity from the link's state.
+fn cog(s: &LinkState<f64>, along: f64) -> (Vec2<f64>, Vec2<f64>) {
+    let r = Vec2::new(s.theta.cos(), s.theta.sin()) * along;
+    (s.origin + r, s.velocity + Vec2::new(-r.y, r.x) * s.omega)
+}
+
+/// Kinetic plus potential energy of the links and the oscillating mass, J, from their
+/// states and the parameters (not the twin's audit).
+fn energy(p: &CccParams<f64>, links: &[LinkState<f64>; 9]) -> f64 {
+    bodies(p)
+        .into_iter()
+        .map(|(k, m, i, along)| {
+            let (x, v) = cog(&links[k], along);
+            let w = links[k].omega;
+            0.5 * (m * v.norm_squared() + i * w * w) - m * p.gravity.dot(&x)
+        })
+        .sum()
+}
+
+/// The worst deviations the oracles met (each relative to its scale), and how many
+/// states they checked.
+#[derive(Debug)]
+struct Oracles {
+    /// States later than this are not checked (s).
+    until: f64,
+    checked: usize,
+    /// `|ω - Δθ/Δt|` over `1 + |ω|`: every link's speed against the central difference
+    /// of its angle measured from its placed joints.
+    speed: f64,
+    /// Largest motion of a locked lever's pin between steps, m.
+    locked_pin: f64,
+    /// Largest `d (ω_lever - ω_shaft)` of a free lever (overrunning: ≤ 0), rad/s.
+    overrun: f64,
+    /// Largest change of a held shaft's angle between steps, rad.
+    held_shaft: f64,
+    /// `P_motor - dE/dt - d ω_s (c6 + c8)` over `1 W + P_motor`: the power balance.
+    power: f64,
+    /// The global balance of forces of links 1-8 (d'Alembert) over the sum of the
+    /// magnitudes of its terms, and `Σc` from its balance of moments minus the twin's,
+    /// over the sum of the moments' magnitudes.
+    force: f64,
+    moment: f64,
+    /// Largest `Σc` from the global balance in a held mode, over T_r (≤ 1).
+    held_sum: f64,
+    /// Largest `|Σc - T_r|` from the global balance with a turning shaft and J_s = 0,
+    /// over the moments' scale.
+    turning_sum: f64,
+    /// Largest joint displacement between jam steps, m.
+    jam_motion: f64,
+    /// The moments' balance in jam (statics), as `moment`.
+    jam_moment: f64,
+    jam_states: usize,
+}
+
+impl Oracles {
+    fn until(until: f64) -> Self {
+        Oracles {
+            until,
+            checked: 0,
+            speed: 0.0,
+            locked_pin: 0.0,
+            overrun: f64::NEG_INFINITY,
+            held_shaft: 0.0,
+            power: 0.0,
+            force: 0.0,
+            moment: 0.0,
+            held_sum: f64::NEG_INFINITY,
+            turning_sum: 0.0,
+            jam_motion: 0.0,
+            jam_moment: 0.0,
+            jam_states: 0,
+        }
+    }
+
+    /// Checks the middle state `b` of five consecutive ones against their 4th-order
+    /// central differences (thesis eq. 5.12), if the steps between them were free of
+    /// events and switches (differences across an impact or a mode change would be
+    /// meaningless). `a` and `c` are `b`'s neighbours.
+    fn check(&mut self, p: &CccParams<f64>, load: f64, h: f64, w: &[Snapshot; 5]) {
+        let quiet = w[1..].iter().all(|s| s.quiet && s.mode == w[0].mode);
+        if !quiet || w[4].time > self.until {
+            return;
+        }
+        let (a, b, c) = (&w[1], &w[2], &w[3]);
+        // d/dt at `b` of a quantity read from each state.
+        let diff = |f: &dyn Fn(&Snapshot) -> f64| {
+            (f(&w[0]) - 8.0 * f(&w[1]) + 8.0 * f(&w[3]) - f(&w[4])) / (12.0 * h)
+        };
+        let diff2 = |f: &dyn Fn(&Snapshot) -> Vec2<f64>| {
+            (f(&w[0]) - f(&w[1]) * 8.0 + f(&w[3]) * 8.0 - f(&w[4])) / (12.0 * h)
+        };
+        self.checked += 1;
+        let d = p.drive.sign::<f64>();
+        let mode = b.mode;
+        // Speeds from the angles of the placed joints: O(h⁴).
+        let mut w_fd = [0.0; 9];
+        for (k, fd) in w_fd.iter_mut().enumerate().skip(1) {
+            *fd = diff(&|s| unwrap_near(s.angles[k], b.angles[k]));
+            let w = b.links[k].omega;
+            self.speed = self.speed.max((w - *fd).abs() / (1.0 + w.abs()));
+        }
+        let shaft_fd = diff(&|s| s.shaft_angle);
+        if mode != Mode::Free {
+            for (lever, clutch) in [6usize, 8].into_iter().zip(mode.clutches()) {
+                match clutch {
+                    Clutch::Locked => {
+                        // The pin (G or I) where the rod's assembly places its end, and
+                        // where the lever holds it: fixed, and the same point.
+                        let rod = lever - 1;
+                        let pin = |s: &Snapshot| s.joints[rod][1];
+                        let moved = (pin(b) - pin(a))
+                            .norm()
+                            .max((pin(c) - pin(b)).norm())
+                            .max((b.joints[lever][1] - pin(b)).norm());
+                        self.locked_pin = self.locked_pin.max(moved);
+                    }
+                    Clutch::Engaged => {
+                        let w = w_fd[lever];
+                        self.speed = self.speed.max((w - shaft_fd).abs() / (1.0 + w.abs()));
+                        assert!(d * w >= -1e-6, "shaft turns against the drive: {w}");
+                    }
+                    Clutch::Free => {
+                        self.overrun = self.overrun.max(d * (w_fd[lever] - shaft_fd));
+                    }
+                }
+            }
+        }
+        if !mode.shaft_turning() {
+            let turned = (b.shaft_angle - a.shaft_angle)
+                .abs()
+                .max((c.shaft_angle - b.shaft_angle).abs());
+            self.held_shaft = self.held_shaft.max(turned);
+        }
+        // Power: the motor's power less the rate of the mechanism's energy is what the
+        // levers deliver to the shaft (free levers none, locked ones stand still).
+        let crank = b.links[1].omega;
+        let p_motor = b.motor_torque * crank;
+        let de_dt = diff(&|s| energy(p, &s.links));
+        let w_shaft = if mode.shaft_turning() { shaft_fd } else { 0.0 };
+        let p_shaft = d * w_shaft * (b.c[0] + b.c[1]);
+        let p_shaft_oracle = p_motor - de_dt;
+        self.power = self
+            .power
+            .max((p_shaft_oracle - p_shaft).abs() / (1.0 + p_motor.abs()));
+        // d'Alembert on links 1-8 together: the ground's reactions at A, F and H, the
+        // motor's torque, gravity and the shaft's torque -d c_k on each lever balance
+        // the rates of momentum (COG accelerations by central differences of the COG
+        // velocities, angular ones of the speeds). Internal joints cancel, so this
+        // sums every group's and lever's equations the twin solved separately.
+        let r = &b.reactions;
+        let (a_pt, f_pt, h_pt) = (p.a, p.f, p.h);
+        let mut force = r[0] + r[4] + r[9] + r[10];
+        let mut moment = b.motor_torque
+            + cross(&a_pt, &r[0])
+            + cross(&f_pt, &r[4])
+            + cross(&h_pt, &(r[9] + r[10]));
+        let mut force_scale = r[0].norm() + r[4].norm() + r[9].norm() + r[10].norm();
+        let mut moment_scale = b.motor_torque.abs()
+            + cross(&a_pt, &r[0]).abs()
+            + cross(&f_pt, &r[4]).abs()
+            + cross(&h_pt, &(r[9] + r[10])).abs();
+        for (k, m, i, along) in bodies(p) {
+            let (x, _) = cog(&b.links[k], along);
+            let acc = diff2(&|s| cog(&s.links[k], along).1);
+            let alpha = diff(&|s| s.links[k].omega);
+            let net = (p.gravity - acc) * m;
+            force += net;
+            force_scale += (p.gravity.norm() + acc.norm()) * m;
+            moment += cross(&x, &net) - i * alpha;
+            moment_scale += cross(&x, &net).abs() + (i * alpha).abs();
+        }
+        self.force = self.force.max(force.norm() / (1.0 + force_scale));
+        let sum_oracle = d * moment;
+        let sum = b.c[0] + b.c[1];
+        self.moment = self
+            .moment
+            .max((sum_oracle - sum).abs() / (1.0 + moment_scale));
+        if !mode.shaft_turning() && mode != Mode::Free {
+            self.held_sum = self.held_sum.max(sum_oracle / load.max(1.0));
+        }
+        if mode.shaft_turning() && p.shaft_inertia == 0.0 {
+            self.turning_sum = self
+                .turning_sum
+                .max((sum_oracle - load).abs() / (1.0 + moment_scale));
+        }
+        if mode == Mode::Jam {
+            // Statics: at rest the motor's torque, gravity and the reactions alone
+            // balance (no inertia term is left in `moment`).
+            self.jam_moment = self
+                .jam_moment
+                .max((sum_oracle - sum).abs() / (1.0 + moment_scale));
+            self.jam_states += 1;
+            for k in 1..=8 {
+                for j in 0..2 {
+                    let moved = (b.joints[k][j] - a.joints[k][j])
+                        .norm()
+                        .max((c.joints[k][j] - b.joints[k][j]).norm());
+                    self.jam_motion = self.jam_motion.max(moved);
+                }
+            }
+        }
+    }
+
+    /// The bounds. What the twin holds exactly (a locked pin, a held shaft, jam at
+    /// rest) must hold to round-off; the central differences' bounds scale with their
+    /// O(h⁴) truncation error, `fd` being the bound at h = 1e-4 s. Measured on S2 at
+    /// h = 1e-4 s: speeds 2.1e-6, power 4.0e-7, forces 1.0e-6, moments 5.5e-7; at
+    /// h = 5e-5 s each is 16 times smaller (truncation, not a mismatch).
+    #[track_caller]
+    fn assert_within(&self, h: f64, fd: f64) {
+        eprintln!("oracles: {self:?}");
+        let bound = fd * (h / 1e-4).powi(4);
+        assert!(self.checked > 100, "too few states checked: {self:?}");
+        assert!(self.speed < bound, "link speeds vs their angles: {self:?}");
+        assert!(self.power < bound, "power balance: {self:?}");
+        assert!(self.force < bound, "balance of forces: {self:?}");
+        assert!(
+            self.moment < bound,
+            "Σc vs the balance of moments: {self:?}"
+        );
+        assert!(self.turning_sum < bound, "Σc vs T_r: {self:?}");
+        assert!(self.locked_pin <= 1e-12, "a locked pin moves: {self:?}");
+        assert!(self.held_shaft == 0.0, "a held shaft turns: {self:?}");
+        assert!(self.jam_motion <= 1e-12, "the jam moves: {self:?}");
+        assert!(self.jam_moment <= 1e-12, "jam's statics: {self:?}");
+        // Overrunning: a free lever never outruns the shaft (beyond the differences'
+        // error, rad/s).
+        assert!(self.overrun <= bound, "a free lever outruns: {self:?}");
+        // Σc from the balance of a held shaft stays within its capacity T_r.
+        assert!(
+            self.held_sum <= 1.0 + bound,
+            "held shaft past T_r: {self:?}"
+        );
+    }
+}
+
 /// SPEC 3's laws of the diode in the twin's current state: in I modes locked levers
-/// stand still and 0 ≤ Σc ≤ T_r; in A modes engaged levers turn with the shaft in the
-/// drive direction with c ≥ 0; in jam everything is at rest; every output is finite.
+/// push (c ≥ 0) and a held shaft carries at most T_r (Σc ≤ T_r); in A modes engaged
+/// levers push (c ≥ 0) and, with J_s = 0, carry exactly T_r; every output is finite.
+/// What the twin sets by its construction (a locked lever's speed, a free lever's
+/// zero torque, a held shaft's zero speed, jam at rest) is checked by `Oracles`
+/// against the joints' motion, the power and the global balance instead.
 fn check_laws(twin: &Twin<f64>, load: f64) {
-    let d = twin.params().drive.sign::<f64>();
     let mode = twin.mode();
     let c = twin.clutch_torques();
     let tol_c = 1e-6 * (load + 1.0);
-    let shaft = twin.shaft_speed();
     let t = twin.time();
     for p in 1..=8 {
         let l = twin.link(p);
@@ -101,33 +422,15 @@ fn check_laws(twin: &Twin<f64>, load: f64) {
         );
     }
     for (k, (lever, clutch)) in [6usize, 8].into_iter().zip(mode.clutches()).enumerate() {
-        let w = twin.link(lever).omega;
-        match clutch {
-            Clutch::Locked => {
-                assert_eq!(w, 0.0, "t = {t}: locked lever {lever} moves in {mode}");
-                assert!(
-                    c[k] >= -tol_c,
-                    "t = {t}: locked lever {lever} pulls: c = {}",
-                    c[k]
-                );
-            }
-            Clutch::Engaged => {
-                assert_close(w, shaft, 1e-12, 1e-12, "engaged lever turns with the shaft");
-                assert!(
-                    d * w >= -1e-9,
-                    "t = {t}: shaft turns against the drive: {w}"
-                );
-                assert!(
-                    c[k] >= -tol_c,
-                    "t = {t}: engaged lever {lever}: c = {}",
-                    c[k]
-                );
-            }
-            Clutch::Free => assert_eq!(c[k], 0.0, "a free lever transmits nothing"),
+        if clutch != Clutch::Free {
+            assert!(
+                c[k] >= -tol_c,
+                "t = {t}: {clutch:?} lever {lever} pulls in {mode}: c = {}",
+                c[k]
+            );
         }
     }
     if !mode.shaft_turning() {
-        assert_eq!(shaft, 0.0);
         assert!(
             c[0] + c[1] <= load + tol_c,
             "t = {t}: held shaft past T_r: {c:?}"
@@ -138,11 +441,6 @@ fn check_laws(twin: &Twin<f64>, load: f64) {
         // levers' own I_H·α); from the kinetostatics of every A sequence, including
         // the six-link group of A68 driven by its crank.
         assert_close(c[0] + c[1], load, 1e-9, 1e-9, "engaged levers carry T_r");
-    }
-    if mode == Mode::Jam {
-        for p in 1..=8 {
-            assert_eq!(twin.link(p).omega, 0.0, "t = {t}: link {p} moves in jam");
-        }
     }
 }
 
@@ -234,7 +532,9 @@ fn every_mode_transmission_functions_match_finite_differences() {
 fn s2(h: f64, t_end: f64, drive: DriveDirection) -> Run {
     let mut p = CccParams::reference();
     p.drive = drive;
-    run(p, TwinSettings::reference(h), s2_inputs(), t_end)
+    let r = run(p, TwinSettings::reference(h), s2_inputs(), t_end);
+    r.oracles.assert_within(h, 2e-5);
+    r
 }
 
 /// S2 at h = 1e-4 over SPEC's full second: the audit balances to 1e-6 of the motor's
@@ -261,6 +561,7 @@ fn s2_runs_one_second_with_energy_audit_and_switches() {
         "speeds jump at a switch: {:.3e}",
         r.worst_speed_gap
     );
+    // regression value: S2's second takes 3 or more coordinate switches.
     assert!(
         r.switches >= 3,
         "the crank's dead points need coordinate switches: {}",
@@ -283,6 +584,7 @@ fn s2_runs_one_second_with_energy_audit_and_switches() {
         .iter()
         .filter(|e| !e.from.shaft_turning() && e.to.shaft_turning())
         .count();
+    // regression value: S2 at h = 1e-4 s starts the shaft 3 or more times.
     assert!(starts >= 3, "shaft starts: {starts}");
     let last = r.events.last().expect("events");
     assert_eq!(last.to, Mode::Jam, "{last:?}");
@@ -339,6 +641,7 @@ fn s2_events_converge_with_the_step() {
     let (ka, kb) = (key(&a), key(&b));
     assert_eq!(ka.len(), kb.len(), "{ka:?} vs {kb:?}");
     let n = ka.len();
+    // regression value: S2's second has 20 or more events at both steps.
     assert!(n >= 20, "too few events to compare: {ka:?}");
     for (x, y) in ka.iter().zip(kb.iter()).take(n) {
         assert_eq!(
@@ -407,6 +710,10 @@ fn s1_ends_at_the_mechanism_singularity() {
         r.max_rel_residual
     );
     assert!(r.events.iter().all(|e| e.kind == EventKind::Start) && r.events.is_empty());
+    // The oracles up to 5 ms before the end: closer, the speeds grow without bound and
+    // the central differences with them.
+    let checked = run_until(CccParams::reference(), s, inputs, 0.6, r.t_end - 5e-3);
+    checked.oracles.assert_within(1e-4, 1e-3);
 }
 
 /// The CCW converter runs too: its rocker's weight alone beats T_r on both levers, so
@@ -484,6 +791,8 @@ fn no_load_does_not_chatter() {
     for e in &r.events[1..] {
         assert_ne!(e.from, e.to, "an event that keeps the mode: {e:?}");
     }
+    // regression value: the unloaded run has fewer than 20 events in 0.2 s.
     assert!(r.events.len() < 20, "{} events in 0.2 s", r.events.len());
     assert!(r.max_rel_residual < 1e-6, "{:.3e}", r.max_rel_residual);
+    r.oracles.assert_within(1e-4, 2e-5);
 }

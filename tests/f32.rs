@@ -118,6 +118,7 @@ fn s2_f32_follows_f64_for_one_second() {
     assert!((b.t_end - 1.0).abs() < 1e-6, "f32 ends at {}", b.t_end);
 
     let dt = same_events(&a, &b);
+    // regression value: the event count of the f64 run (20 or more).
     assert!(a.events.len() >= 20, "{} events", a.events.len());
     assert!(dt < 1e-4, "event times differ by {dt:.3e} s");
 
@@ -153,6 +154,7 @@ fn s2_f32_at_twice_the_step() {
     let b = s2::<f32>(h, 0.5, 800.0, DriveDirection::Cw);
     assert!(b.end.is_none(), "f32 stops: {:?}", b.end);
     let dt = same_events(&a, &b);
+    // regression value: the event count of the f64 run (15 or more).
     assert!(a.events.len() >= 15, "{} events", a.events.len());
     assert!(dt < 1e-4, "event times differ by {dt:.3e} s");
     let (x, y) = (a.crank_half.unwrap(), b.crank_half.unwrap());
@@ -177,6 +179,7 @@ fn s2_f32_without_load_does_not_chatter() {
     assert!(b.end.is_none(), "f32 stops: {:?}", b.end);
     let dt = same_events(&a, &b);
     assert!(dt < 1e-4, "event times differ by {dt:.3e} s");
+    // regression value: fewer than 10 events in 0.2 s.
     assert!(b.events.len() < 10, "{} events in 0.2 s", b.events.len());
     println!(
         "S2 without load, f32 vs f64, 0.2 s: {} events, times within {dt:.2e} s",
@@ -251,6 +254,7 @@ fn s1_f32_ends_at_the_diode_singularity_like_f64() {
     assert!(e32.at_singularity() && e64.at_singularity());
     assert!(s64.iter().all(|s| *s < 1e-2), "{s64:?}");
     assert_eq!((in64, in32), ([true; 2], [true; 2]));
+    // regression value: the f64 twin's time of the diode's singularity, 0.3238 s.
     assert!((t64 - 0.3238).abs() < 2e-4, "{t64}");
     assert!(t32 <= t64 && t64 - t32 < 3e-3, "f32 {t32} vs f64 {t64}");
     // The independent check: the geometry at f32's last good state.

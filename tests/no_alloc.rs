@@ -1,5 +1,8 @@
 //! The step path does not touch the heap: a counting global allocator around 1000 DP5
-//! steps and a kinetostatics call of each thesis mechanism, in `f64` and `f32`.
+//! steps and a kinetostatics call of each thesis mechanism, and 2000 steps of the
+//! converter's twin on S2 (its first 0.2 s: the start, mode events, plastic impacts,
+//! coordinate switches), in `f64` and `f32`. The counter is shown to count: the same
+//! measurement around a closure that allocates a `Vec` must see it.
 //!
 //! Only the test's own thread counts (the core has no threads: its allocations would
 //! be there): the harness's main thread may allocate while a region is measured, and
@@ -10,7 +13,9 @@
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 use std::sync::atomic::{AtomicUsize, Ordering};
+use structomat::ccc::{CccParams, Inputs, MotorInput, Twin, TwinError, TwinSettings};
 use structomat::mechanisms::{five_bar, slider_crank, Scenario};
+use structomat::motor::Motor;
 use structomat::{Real, StepError};
 
 /// `System`, counting the calls that obtain memory (`alloc`, `alloc_zeroed`, `realloc`).
@@ -58,6 +63,47 @@ static GLOBAL: Counting = Counting;
 
 fn allocations() -> usize {
     ALLOCATIONS.load(Ordering::SeqCst)
+}
+
+/// The allocations `f` makes.
+fn counted<R>(f: impl FnOnce() -> R) -> (usize, R) {
+    let before = allocations();
+    let r = std::hint::black_box(f());
+    (allocations() - before, r)
+}
+
+/// Twin steps in the measured region (S2 at h = 1e-4 s: 0.2 s).
+const TWIN_STEPS: usize = 2000;
+
+/// Allocations during [`TWIN_STEPS`] steps of the reference converter on S2, the
+/// steps done, and the first error.
+fn measure_twin<T: Real>() -> (usize, usize, Option<TwinError>) {
+    let inputs = Inputs {
+        motor: MotorInput::Law(Motor::Constant(T::c(12.0))),
+        load: T::c(800.0),
+        measured: None,
+    };
+    let mut twin = Twin::new(
+        CccParams::<T>::reference(),
+        TwinSettings::reference(T::c(1e-4)),
+        inputs,
+    )
+    .expect("the reference converter sets up");
+    let mut done = 0;
+    let mut error = None;
+    let (n, ()) = counted(|| {
+        for _ in 0..TWIN_STEPS {
+            match twin.step(&inputs) {
+                Ok(()) => done += 1,
+                Err(e) => {
+                    error = Some(e);
+                    break;
+                }
+            }
+            std::hint::black_box(twin.clutch_torques());
+        }
+    });
+    (n, done, error)
 }
 
 /// Steps of each mechanism in the measured region.
@@ -109,13 +155,12 @@ fn measure<T: Real>(scenario: &Scenario<T>) -> Run {
 #[test]
 fn step_and_kinetostatics_do_not_allocate() {
     COUNTED.with(|c| c.set(true));
-    // The counter works (the test is not vacuous).
-    let before = allocations();
-    drop(std::hint::black_box(vec![0u8; 16]));
-    assert!(
-        allocations() > before,
-        "the counting allocator is not in use"
-    );
+    // The counter works (the test is not vacuous): the measurement sees one `Vec`.
+    let (n, v) = counted(|| vec![0u8; 16]);
+    drop(v);
+    assert_eq!(n, 1, "the counting allocator is not in use");
+    let (n, ()) = counted(|| ());
+    assert_eq!(n, 0, "the measurement allocates by itself");
 
     let slider_f64 = slider_crank::<f64>().expect("slider-crank model");
     let five_f64 = five_bar::<f64>().expect("five-bar model");
@@ -128,6 +173,18 @@ fn step_and_kinetostatics_do_not_allocate() {
         ("slider_crank/f32", measure(&slider_f32)),
         ("five_bar/f32", measure(&five_f32)),
     ];
+
+    for (name, (n, done, error)) in [
+        ("twin/f64", measure_twin::<f64>()),
+        ("twin/f32", measure_twin::<f32>()),
+    ] {
+        assert!(
+            error.is_none(),
+            "{name}: failed after {done} steps: {error:?}"
+        );
+        assert_eq!(done, TWIN_STEPS, "{name}: steps done");
+        assert_eq!(n, 0, "{name}: heap allocations during {TWIN_STEPS} steps");
+    }
 
     for (name, run) in &runs {
         assert!(

@@ -8,12 +8,13 @@
 
 use crate::config::{MAX_DOF, POSE_ROWS};
 use crate::error::StepError;
+use crate::linalg::{cholesky, cholesky_solve};
 use crate::model::Model;
 use crate::scalar::{cross, perp, rotate_cs, Real, Vec2};
 use crate::structomat::JointKind;
 use crate::transmission::evaluate;
 use crate::workspace::{BodyState, Workspace};
-use nalgebra::{Cholesky, SMatrix, SVector};
+use nalgebra::{SMatrix, SVector};
 
 /// Kinetic and potential energy, J.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -302,8 +303,8 @@ pub fn solve_accelerations<T: Real>(
             qdd[1] = (a * gf[1] - b * gf[0]) / det;
         }
         _ => {
-            let chol = Cholesky::new(mq).ok_or(singular)?;
-            let x = chol.solve(&gf);
+            let l = cholesky(&mq).ok_or(singular)?;
+            let x = cholesky_solve(&l, &gf);
             for (o, v) in qdd.iter_mut().zip(x.iter()) {
                 *o = *v;
             }

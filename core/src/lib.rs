@@ -1,4 +1,5 @@
 #![no_std]
+#![warn(missing_docs)]
 //! # structomat
 //!
 //! Real-time dynamics of planar linkages by *structomats* (Assur groups), transmission
@@ -21,6 +22,11 @@
 //!
 //! No heap, no panics on the step path, bounded iterations, `libm` math everywhere
 //! (bit-identical results on every platform), generic over `f64` and `f32`.
+//!
+//! Cargo feature `log` (off by default): the twin's diagnostic records (mode changes,
+//! coordinate switches, refused mode candidates) through the `log` crate's macros.
+//! Without it they compile to nothing: their arguments are type-checked, but no
+//! formatting code and no `log` is linked into the firmware.
 //!
 //! ```
 //! use structomat::mechanisms::five_bar;
@@ -60,8 +66,18 @@ pub mod motor;
 pub mod scalar;
 pub mod simulation;
 pub mod structomat;
+mod trace;
 pub mod transmission;
 pub mod workspace;
+
+// The twin's records name `log::debug!`, `log::info!` and `log::warn!`: without the
+// feature `log`, that path is this crate's root, where `trace`'s macros stand in (they
+// type-check their arguments and format nothing).
+#[cfg(not(feature = "log"))]
+extern crate self as log;
+#[cfg(not(feature = "log"))]
+#[allow(unused_imports)]
+pub(crate) use trace::{debug, info, warn};
 
 pub use error::{GroupFault, GroupId, ModelError, StepError};
 pub use model::{Link, Model, ModelBuilder};

@@ -182,3 +182,209 @@ pub fn lu_substitute<T: Real, const N: usize, const M: usize>(lu: &[[T; M]; M], 
         }
     }
 }
+
+/// Cholesky factor of a symmetric positive definite `a`: the lower-triangular `L` with
+/// `L Lᵀ = A` and a positive diagonal (its strict upper part zero). Only the lower
+/// triangle of `a` is read. `None` if a pivot is zero, negative or NaN (`a` is not
+/// positive definite to working precision).
+///
+/// Column by column (Cholesky-Banachiewicz by columns, Golub & Van Loan alg. 4.2.1):
+/// column `j` less `L_jk` times column `k` for every `k < j`, then divided by the square
+/// root of its diagonal. The operations and their order are nalgebra's
+/// `Cholesky::new`'s, so the factor has the same bits. Bounded work: `N³/6`
+/// multiply-adds and `N` square roots, no iteration.
+pub fn cholesky<T: Real, const N: usize>(a: &SMatrix<T, N, N>) -> Option<SMatrix<T, N, N>> {
+    let mut l = *a;
+    for j in 0..N {
+        for k in 0..j {
+            let f = *l.get((j, k))?;
+            for r in j..N {
+                let lrk = *l.get((r, k))?;
+                let e = l.get_mut((r, j))?;
+                *e = -f * lrk + *e;
+            }
+        }
+        let diag = *l.get((j, j))?;
+        if diag == T::zero() {
+            return None;
+        }
+        let d = diag.try_sqrt()?;
+        *l.get_mut((j, j))? = d;
+        for r in j + 1..N {
+            let e = l.get_mut((r, j))?;
+            *e /= d;
+        }
+        for c in j + 1..N {
+            *l.get_mut((j, c))? = T::zero();
+        }
+    }
+    Some(l)
+}
+
+/// Solves `L Lᵀ x = b` for `x` from the factor `l` of [`cholesky`]: `L y = b` forward
+/// (column-oriented), then `Lᵀ x = y` backward (row-oriented, by dot products), in
+/// nalgebra's `Cholesky::solve`'s order of operations (same bits). `N²` multiply-adds;
+/// a zero diagonal (no factor of [`cholesky`] has one) gives infinities, not a panic.
+pub fn cholesky_solve<T: Real, const N: usize>(
+    l: &SMatrix<T, N, N>,
+    b: &SVector<T, N>,
+) -> SVector<T, N> {
+    let mut x = *b;
+    for i in 0..N {
+        let (Some(d), Some(xi)) = (l.get((i, i)).copied(), x.get(i).copied()) else {
+            break;
+        };
+        let coeff = xi / d;
+        if let Some(e) = x.get_mut(i) {
+            *e = coeff;
+        }
+        for r in i + 1..N {
+            if let (Some(lri), Some(e)) = (l.get((r, i)).copied(), x.get_mut(r)) {
+                *e = -coeff * lri + *e;
+            }
+        }
+    }
+    for i in (0..N).rev() {
+        let mut dot = T::zero();
+        for k in i + 1..N {
+            if let (Some(lki), Some(xk)) = (l.get((k, i)), x.get(k)) {
+                dot += *lki * *xk;
+            }
+        }
+        if let (Some(d), Some(e)) = (l.get((i, i)).copied(), x.get_mut(i)) {
+            *e = (*e - dot) / d;
+        }
+    }
+    x
+}
+
+/// The inverse of a 3 × 3 matrix by its cofactors over its determinant (Cramer's
+/// rule), in nalgebra's `try_inverse`'s order of operations (same bits). `None` only
+/// if the determinant is exactly zero: a nearly singular or non-finite `m` gives a
+/// large or non-finite inverse, which the caller's own tests must catch. 12
+/// multiplications for the minors and determinant, 9 divisions, no branch but that.
+pub fn inverse3<T: Real>(m: &SMatrix<T, 3, 3>) -> Option<SMatrix<T, 3, 3>> {
+    let [[m11, m21, m31], [m12, m22, m32], [m13, m23, m33]] = m.data.0;
+    let minor_m12_m23 = m22 * m33 - m32 * m23;
+    let minor_m11_m23 = m21 * m33 - m31 * m23;
+    let minor_m11_m22 = m21 * m32 - m31 * m22;
+    let det = m11 * minor_m12_m23 - m12 * minor_m11_m23 + m13 * minor_m11_m22;
+    if det == T::zero() {
+        return None;
+    }
+    Some(SMatrix::<T, 3, 3>::new(
+        minor_m12_m23 / det,
+        (m13 * m32 - m33 * m12) / det,
+        (m12 * m23 - m22 * m13) / det,
+        -minor_m11_m23 / det,
+        (m11 * m33 - m31 * m13) / det,
+        (m13 * m21 - m23 * m11) / det,
+        minor_m11_m22 / det,
+        (m12 * m31 - m32 * m11) / det,
+        (m11 * m22 - m21 * m12) / det,
+    ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
+
+    /// A pseudo-random sequence in [-1, 1) (SplitMix64), for test matrices.
+    struct Rng(u64);
+    impl Rng {
+        fn next(&mut self) -> f64 {
+            self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+            let mut z = self.0;
+            z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+            z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+            z ^= z >> 31;
+            (z >> 11) as f64 / (1u64 << 52) as f64 - 1.0
+        }
+    }
+
+    /// `B Bᵀ + I`: symmetric positive definite.
+    fn spd<const N: usize>(rng: &mut Rng) -> SMatrix<f64, N, N> {
+        let b = SMatrix::<f64, N, N>::from_fn(|_, _| rng.next());
+        b * b.transpose() + SMatrix::<f64, N, N>::identity()
+    }
+
+    /// A known factor: `A = L Lᵀ` with `L = [[2, 0, 0], [1, 3, 0], [-1, 2, 4]]` (the
+    /// product worked by hand: `A = [[4, 2, -2], [2, 10, 5], [-2, 5, 21]]`).
+    #[test]
+    fn cholesky_of_a_known_matrix() {
+        let a = Matrix3::new(4.0, 2.0, -2.0, 2.0, 10.0, 5.0, -2.0, 5.0, 21.0);
+        let l = cholesky(&a).unwrap();
+        let want = Matrix3::new(2.0, 0.0, 0.0, 1.0, 3.0, 0.0, -1.0, 2.0, 4.0);
+        assert_eq!(l, want);
+        // A x = b with x = (1, -2, 3): b = A x = (-6, -3, 51).
+        let x = cholesky_solve(&l, &Vector3::new(-6.0, -3.0, 51.0));
+        assert!((x - Vector3::new(1.0, -2.0, 3.0)).norm() < 1e-14, "{x}");
+    }
+
+    /// `L Lᵀ = A` and the residual `A x - b` to round-off, on random SPD matrices of
+    /// every size the core solves; the bits are nalgebra's `Cholesky` (the dynamics'
+    /// golden pins were made with it).
+    #[test]
+    fn cholesky_factors_and_solves() {
+        fn check<const N: usize>(rng: &mut Rng) {
+            for _ in 0..200 {
+                let a = spd::<N>(rng);
+                let b = SVector::<f64, N>::from_fn(|_, _| rng.next());
+                let l = cholesky(&a).unwrap();
+                let scale = a.norm();
+                assert!((l * l.transpose() - a).norm() < 1e-14 * scale);
+                for i in 0..N {
+                    assert!(l[(i, i)] > 0.0);
+                    for j in i + 1..N {
+                        assert_eq!(l[(i, j)], 0.0);
+                    }
+                }
+                let x = cholesky_solve(&l, &b);
+                assert!((a * x - b).norm() < 1e-13 * scale * (x.norm() + 1.0));
+                let na = nalgebra::Cholesky::new(a).unwrap();
+                assert_eq!(l, na.l());
+                assert_eq!(x, na.solve(&b));
+            }
+        }
+        let mut rng = Rng(1);
+        check::<1>(&mut rng);
+        check::<2>(&mut rng);
+        check::<3>(&mut rng);
+        check::<6>(&mut rng);
+    }
+
+    /// Not positive definite: a zero, a negative or a NaN pivot is refused.
+    #[test]
+    fn cholesky_refuses_indefinite_matrices() {
+        let zero = Matrix3::new(1.0, 1.0, 0.0, 1.0, 1.0, 0.0, 0.0, 0.0, 1.0);
+        assert!(cholesky(&zero).is_none());
+        let indefinite = Matrix3::new(1.0, 2.0, 0.0, 2.0, 1.0, 0.0, 0.0, 0.0, 1.0);
+        assert!(cholesky(&indefinite).is_none());
+        let nan = Matrix3::new(f64::NAN, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0);
+        assert!(cholesky(&nan).is_none());
+    }
+
+    /// `A A⁻¹ = I` on random matrices, the bits of nalgebra's `try_inverse`, and a
+    /// singular matrix refused.
+    #[test]
+    fn inverse3_inverts() {
+        let mut rng = Rng(7);
+        for _ in 0..500 {
+            let a = Matrix3::from_fn(|_, _| rng.next());
+            let inv = inverse3(&a).unwrap();
+            let cond = a.norm() * inv.norm();
+            assert!((a * inv - Matrix3::identity()).norm() < 1e-14 * cond, "{a}");
+            assert_eq!(Some(inv), a.try_inverse());
+        }
+        // Known: diag(2, 4, -8) and a unit upper triangle.
+        let d = Matrix3::from_diagonal(&Vector3::new(2.0, 4.0, -8.0));
+        let want = Matrix3::from_diagonal(&Vector3::new(0.5, 0.25, -0.125));
+        assert_eq!(inverse3(&d), Some(want));
+        let u = Matrix3::new(1.0, 2.0, 3.0, 0.0, 1.0, 4.0, 0.0, 0.0, 1.0);
+        let u_inv = Matrix3::new(1.0, -2.0, 5.0, 0.0, 1.0, -4.0, 0.0, 0.0, 1.0);
+        assert_eq!(inverse3(&u), Some(u_inv));
+        let singular = Matrix3::new(1.0, 2.0, 3.0, 2.0, 4.0, 6.0, 0.0, 1.0, 1.0);
+        assert_eq!(inverse3(&singular), None);
+    }
+}
