@@ -2,9 +2,9 @@
 //! the equations of motion with the twin's inputs, the physical state of every link,
 //! the transmitted torques c6, c8 and the joint reactions.
 
-use super::build::{build_into, physical_link, BodyMap, BRANCHES, CRANK};
-use super::mode::{Clutch, Coordinates, Mode};
-use super::params::CccParams;
+use super::super::build::{build_into, physical_link, BodyMap, BRANCHES, CRANK};
+use super::super::mode::{Clutch, Coordinates, Mode};
+use super::super::params::CccParams;
 use crate::dynamics::solve_accelerations;
 use crate::error::{GroupId, StepError};
 use crate::integrator::OdeSystem;
