@@ -109,6 +109,7 @@ impl<T: Real> Twin<T> {
             Mode::I0,
             &pose,
             time,
+            self.settings.switch_below,
             &mut self.reference,
             self.slots.spares().1,
         )?;

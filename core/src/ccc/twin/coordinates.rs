@@ -28,14 +28,15 @@ pub struct CoordinateSwitch<T> {
 }
 
 /// Builds into `slot` the first choice of `mode`'s coordinates that assembles at `pose`
-/// well conditioned, else the best conditioned that assembles (`spare`: the scratch
-/// slot the others are tried in); returns its coordinates. On an error `slot` is
-/// half-built.
+/// conditioned at least `switch_below` ([`TwinSettings::switch_below`](super::TwinSettings::switch_below)), else the best
+/// conditioned that assembles (`spare`: the scratch slot the others are tried in);
+/// returns its coordinates. On an error `slot` is half-built.
 pub(super) fn best_slot<T: Real>(
     params: &CccParams<T>,
     mode: Mode,
     pose: &[T; 9],
     time: f64,
+    switch_below: T,
     slot: &mut Slot<T>,
     spare: &mut Slot<T>,
 ) -> Result<[T; 2], TwinError> {
@@ -43,7 +44,7 @@ pub(super) fn best_slot<T: Real>(
     let mut best: Option<(T, [T; 2])> = None;
     let failures = scan_choices(params, mode, pose, time, None, slot, spare, |s, q| {
         let cond = s.conditioning();
-        if cond >= T::c(0.2) {
+        if cond >= switch_below {
             best = Some((cond, q));
             Take::KeepAndStop
         } else if best.is_none_or(|(b, _)| cond > b) {
@@ -219,5 +220,71 @@ impl<T: Real> Twin<T> {
             speed_gap,
         });
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::super::build::initial_pose;
+    use super::super::super::mode::{Coordinates, Mode};
+    use super::super::super::params::CccParams;
+    use super::super::slot::Slot;
+    use super::best_slot;
+
+    /// Each coordinate choice of `mode` built alone at `pose`: its conditioning there.
+    fn conditionings(p: &CccParams<f64>, mode: Mode, pose: &[f64; 9]) -> [(Coordinates, f64); 3] {
+        let mut slot = Slot::empty();
+        let mut out = [(Coordinates::CrankSwing, 0.0); 3];
+        for (o, c) in out.iter_mut().zip(mode.coordinate_choices()) {
+            *o = (*c, -1.0);
+            if slot.rebuild(p, mode, *c, pose, 0.0).is_ok() {
+                o.1 = slot.conditioning();
+            }
+        }
+        out
+    }
+
+    /// Which choice `best_slot` takes at `pose` with `switch_below`.
+    fn taken(p: &CccParams<f64>, mode: Mode, pose: &[f64; 9], switch_below: f64) -> Coordinates {
+        let (mut slot, mut spare) = (Slot::empty(), Slot::empty());
+        best_slot(p, mode, pose, 0.0, switch_below, &mut slot, &mut spare).unwrap();
+        slot.coords
+    }
+
+    /// Regression (best_slot ignored `switch_below`, taking the first choice conditioned
+    /// at least 0.2): the choice taken is the first in order conditioned at least
+    /// `switch_below`, else the best conditioned, for thresholds on either side of each
+    /// choice's conditioning, over crank angles around the turn (the oracle: that rule
+    /// applied to the choices built one by one).
+    #[test]
+    fn best_slot_takes_the_first_choice_conditioned_at_least_switch_below() {
+        let p = CccParams::<f64>::reference();
+        let mut moved = 0;
+        for deg in (0..360).step_by(15) {
+            let Some(pose) = initial_pose(&p, f64::from(deg).to_radians(), 90f64.to_radians())
+            else {
+                continue;
+            };
+            let conds = conditionings(&p, Mode::I0, &pose);
+            let best = conds
+                .iter()
+                .fold(conds[0], |b, c| if c.1 > b.1 { *c } else { b });
+            for (_, c) in conds {
+                for switch_below in [c * 0.999, c * 1.001] {
+                    if !(switch_below > 0.0 && switch_below < 1.0) {
+                        continue;
+                    }
+                    let want = conds
+                        .iter()
+                        .find(|(_, k)| *k >= switch_below)
+                        .map_or(best.0, |(x, _)| *x);
+                    let got = taken(&p, Mode::I0, &pose, switch_below);
+                    assert_eq!(got, want, "{deg}°, switch_below {switch_below}: {conds:?}");
+                    moved += usize::from(got != taken(&p, Mode::I0, &pose, 0.2));
+                }
+            }
+        }
+        // Some thresholds take another choice than 0.2 would: the test tells the two apart.
+        assert!(moved > 0);
     }
 }

@@ -151,7 +151,15 @@ impl<T: Real> Twin<T> {
             Mode::Free
         };
         let (mut slot, mut spare) = (Slot::empty(), Slot::empty());
-        let q = best_slot(&params, mode, &pose, 0.0, &mut slot, &mut spare)?;
+        let q = best_slot(
+            &params,
+            mode,
+            &pose,
+            0.0,
+            settings.switch_below,
+            &mut slot,
+            &mut spare,
+        )?;
         let mut y = SVector::<T, STATE>::zeros();
         // Initial link speeds: those of the crank and the swing link (the others follow
         // from the kinematics; the first choice of a 2-DOF mode is crank + swing link).
