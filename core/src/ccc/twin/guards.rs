@@ -37,9 +37,13 @@ impl EventKind {
             EventKind::Start => "start",
             EventKind::Inputs => "inputs",
             EventKind::Catch(6) => "catch6",
-            EventKind::Catch(_) => "catch8",
+            EventKind::Catch(8) => "catch8",
+            // No other lever has a clutch: a kind built by hand with one is named
+            // without a lever, never as another lever's.
+            EventKind::Catch(_) => "catch",
             EventKind::Release(6) => "release6",
-            EventKind::Release(_) => "release8",
+            EventKind::Release(8) => "release8",
+            EventKind::Release(_) => "release",
             EventKind::Breakaway => "breakaway",
             EventKind::ShaftStop => "shaft-stop",
         }
@@ -195,5 +199,37 @@ impl<T: Real> Twin<T> {
             g[5] = Some(-d * shaft);
         }
         g
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::EventKind;
+
+    /// Regression (`EventKind::name` called every catch but lever 6's "catch8", every
+    /// release but lever 6's "release8"): each kind is named by its own lever, and the
+    /// names of different kinds differ.
+    #[test]
+    fn each_event_kind_is_named_by_its_own_lever() {
+        let named = [
+            (EventKind::Start, "start"),
+            (EventKind::Inputs, "inputs"),
+            (EventKind::Catch(6), "catch6"),
+            (EventKind::Catch(8), "catch8"),
+            (EventKind::Release(6), "release6"),
+            (EventKind::Release(8), "release8"),
+            (EventKind::Breakaway, "breakaway"),
+            (EventKind::ShaftStop, "shaft-stop"),
+            (EventKind::Catch(7), "catch"),
+            (EventKind::Release(5), "release"),
+        ];
+        for (k, name) in named {
+            assert_eq!(k.name(), name, "{k:?}");
+        }
+        for (i, (a, _)) in named.iter().enumerate() {
+            for (b, _) in named.iter().skip(i + 1) {
+                assert_ne!(a.name(), b.name(), "{a:?} and {b:?}");
+            }
+        }
     }
 }
