@@ -2,7 +2,7 @@
 //! kinetostatics, clutch torques and event functions.
 
 use super::error::TwinError;
-use super::guards::{fired, Guards, SPEED_GUARDS};
+use super::guards::Guards;
 use super::slot::{Inputs, LinkState};
 use super::{Twin, Work};
 use crate::dynamics::finish_accelerations;
@@ -83,7 +83,7 @@ impl<T: Real> Twin<T> {
             .filter(|(g0, h)| self.torques_can_wait(g0, *h))
             .is_some_and(|(g0, _)| {
                 let g = self.guards_of(self.slots.cur(), &links, &self.c, inputs);
-                fired(g0, &g) & SPEED_GUARDS != 0
+                g0.fired(&g).any_speed()
             });
         if !deferred {
             let slot = self.slots.cur_mut();

@@ -78,27 +78,210 @@ pub struct Event<T> {
     pub speed_gap: T,
 }
 
-/// Which event functions are watched, their values: `[catch6, catch8, release6,
-/// release8, breakaway, shaft stop]`; an event fires when its function goes from ≤ 0 to
-/// > 0 over a step.
-pub(super) type Guards<T> = [Option<T>; 6];
+/// One event function of the diode (SPEC 3). Each fires its event when it goes from
+/// ≤ 0 to > 0 over a step.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum Guard {
+    /// Free lever 6 passes the shaft in the drive direction (a speed).
+    Catch6,
+    /// Free lever 8 passes the shaft in the drive direction (a speed).
+    Catch8,
+    /// Locked or engaged lever 6's transmitted torque falls under 0 (a torque).
+    Release6,
+    /// Locked or engaged lever 8's transmitted torque falls under 0 (a torque).
+    Release8,
+    /// The locked levers' torques rise past the load T_r (a torque).
+    Breakaway,
+    /// The turning shaft's speed falls to 0 (a speed).
+    ShaftStop,
+}
 
-/// The event functions that are speeds (catches, shaft stop), as bits of [`fired`]:
-/// the kinematics up to the velocities evaluate them, with no equations of motion and
-/// no kinetostatics.
-pub(super) const SPEED_GUARDS: u8 = 0b10_0011;
+impl Guard {
+    /// Every event function, in the order ties between them are broken (the first
+    /// wins).
+    pub(super) const ALL: [Guard; 6] = [
+        Guard::Catch6,
+        Guard::Catch8,
+        Guard::Release6,
+        Guard::Release8,
+        Guard::Breakaway,
+        Guard::ShaftStop,
+    ];
 
-/// Which of the event functions went from ≤ 0 to > 0 (bit k: function k).
-pub(super) fn fired<T: Real>(g0: &Guards<T>, g1: &Guards<T>) -> u8 {
-    let mut bits = 0u8;
-    for (k, (a, b)) in g0.iter().zip(g1.iter()).enumerate() {
-        if let (Some(a), Some(b)) = (a, b) {
-            if *a <= T::zero() && *b > T::zero() {
-                bits |= 1 << k;
-            }
+    /// The catch of branch `k` (0: lever 6, 1: lever 8; see `BRANCHES`).
+    pub(super) fn catch(k: usize) -> Guard {
+        if k == 0 {
+            Guard::Catch6
+        } else {
+            Guard::Catch8
         }
     }
-    bits
+
+    /// The release of branch `k` (0: lever 6, 1: lever 8).
+    pub(super) fn release(k: usize) -> Guard {
+        if k == 0 {
+            Guard::Release6
+        } else {
+            Guard::Release8
+        }
+    }
+
+    /// Whether the function is a speed (the catches, the shaft stop): the kinematics
+    /// up to the velocities evaluate it, with no equations of motion and no
+    /// kinetostatics; the others are clutch torques, which need the kinetostatics.
+    pub(super) fn is_speed(self) -> bool {
+        matches!(self, Guard::Catch6 | Guard::Catch8 | Guard::ShaftStop)
+    }
+
+    /// The event it fires.
+    pub(super) fn event(self) -> EventKind {
+        match self {
+            Guard::Catch6 => EventKind::Catch(6),
+            Guard::Catch8 => EventKind::Catch(8),
+            Guard::Release6 => EventKind::Release(6),
+            Guard::Release8 => EventKind::Release(8),
+            Guard::Breakaway => EventKind::Breakaway,
+            Guard::ShaftStop => EventKind::ShaftStop,
+        }
+    }
+}
+
+/// The event functions of a mode at a state (or their time derivatives): `None` for
+/// one the mode does not watch (a catch of a held lever, a release of a free one).
+/// Speeds in rad/s, torques in N·m (rates per second).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) struct Guards<T> {
+    /// [`Guard::Catch6`].
+    pub catch6: Option<T>,
+    /// [`Guard::Catch8`].
+    pub catch8: Option<T>,
+    /// [`Guard::Release6`].
+    pub release6: Option<T>,
+    /// [`Guard::Release8`].
+    pub release8: Option<T>,
+    /// [`Guard::Breakaway`].
+    pub breakaway: Option<T>,
+    /// [`Guard::ShaftStop`].
+    pub shaft_stop: Option<T>,
+}
+
+impl<T: Real> Guards<T> {
+    /// None watched (a twin without the diode).
+    pub(super) const NONE: Self = Guards {
+        catch6: None,
+        catch8: None,
+        release6: None,
+        release8: None,
+        breakaway: None,
+        shaft_stop: None,
+    };
+
+    /// Function `g`'s value, if watched.
+    pub(super) fn get(&self, g: Guard) -> Option<T> {
+        match g {
+            Guard::Catch6 => self.catch6,
+            Guard::Catch8 => self.catch8,
+            Guard::Release6 => self.release6,
+            Guard::Release8 => self.release8,
+            Guard::Breakaway => self.breakaway,
+            Guard::ShaftStop => self.shaft_stop,
+        }
+    }
+
+    /// Function `g`'s place.
+    pub(super) fn get_mut(&mut self, g: Guard) -> &mut Option<T> {
+        match g {
+            Guard::Catch6 => &mut self.catch6,
+            Guard::Catch8 => &mut self.catch8,
+            Guard::Release6 => &mut self.release6,
+            Guard::Release8 => &mut self.release8,
+            Guard::Breakaway => &mut self.breakaway,
+            Guard::ShaftStop => &mut self.shaft_stop,
+        }
+    }
+
+    /// The watched functions and their values, in [`Guard::ALL`]'s order.
+    pub(super) fn watched(&self) -> impl Iterator<Item = (Guard, T)> + '_ {
+        Guard::ALL
+            .into_iter()
+            .filter_map(|g| self.get(g).map(|v| (g, v)))
+    }
+
+    /// The watched speed functions (catches, shaft stop) and their values.
+    pub(super) fn speed_guards(&self) -> impl Iterator<Item = (Guard, T)> + '_ {
+        self.watched().filter(|(g, _)| g.is_speed())
+    }
+
+    /// Whether a watched function is past its crossing (> 0) here: the mode is no longer
+    /// consistent.
+    pub(super) fn any_past(&self) -> bool {
+        self.watched().any(|(_, v)| v > T::zero())
+    }
+
+    /// Which functions went from ≤ 0 here to > 0 in `after` (the same mode, later).
+    pub(super) fn fired(&self, after: &Guards<T>) -> Fired {
+        let mut fired = Fired::default();
+        for g in Guard::ALL {
+            if let (Some(a), Some(b)) = (self.get(g), after.get(g)) {
+                if a <= T::zero() && b > T::zero() {
+                    fired.insert(g);
+                }
+            }
+        }
+        fired
+    }
+}
+
+/// A set of event functions: those that fired over a step.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub(super) struct Fired {
+    /// Bit `g as u8` for each [`Guard`] `g` in the set.
+    bits: u8,
+}
+
+impl Fired {
+    fn insert(&mut self, g: Guard) {
+        self.bits |= 1 << g as u8;
+    }
+
+    /// Whether `g` is in the set.
+    pub(super) fn contains(self, g: Guard) -> bool {
+        self.bits & (1 << g as u8) != 0
+    }
+
+    /// Whether none fired.
+    pub(super) fn is_empty(self) -> bool {
+        self.bits == 0
+    }
+
+    /// Whether a speed function fired.
+    pub(super) fn any_speed(self) -> bool {
+        Guard::ALL.iter().any(|g| g.is_speed() && self.contains(*g))
+    }
+
+    /// Whether only speed functions fired (none that needs the kinetostatics).
+    pub(super) fn speeds_only(self) -> bool {
+        Guard::ALL
+            .iter()
+            .all(|g| g.is_speed() || !self.contains(*g))
+    }
+
+    /// The first that fired, in [`Guard::ALL`]'s order.
+    pub(super) fn first(self) -> Option<Guard> {
+        Guard::ALL.into_iter().find(|g| self.contains(*g))
+    }
+
+    /// The one that fired, if exactly one did.
+    pub(super) fn single(self) -> Option<Guard> {
+        (self.bits.count_ones() == 1)
+            .then(|| self.first())
+            .flatten()
+    }
+
+    /// The set as bits, bit `k` for the `k`-th of [`Guard::ALL`] (for logs).
+    pub(super) fn bits(self) -> u8 {
+        self.bits
+    }
 }
 
 impl<T: Real> Twin<T> {
@@ -112,19 +295,15 @@ impl<T: Real> Twin<T> {
     /// mode choice at the speed event still checks every clutch torque.
     pub(super) fn torques_can_wait(&self, g0: &Guards<T>, h: T) -> bool {
         let k = T::c(16.0);
-        g0.iter().enumerate().all(|(i, g)| {
-            let Some(a) = g else { return true };
-            if SPEED_GUARDS & (1 << i) != 0 {
-                return true;
-            }
+        g0.watched().filter(|(g, _)| !g.is_speed()).all(|(g, a)| {
             let Some(b) = self
                 .last_guards
-                .and_then(|(gl, hp)| gl.get(i).copied().flatten().map(|b| (b, hp)))
-                .map(|(b, hp)| (*a - b).abs() * (h / hp))
+                .and_then(|(gl, hp)| gl.get(g).map(|b| (b, hp)))
+                .map(|(b, hp)| (a - b).abs() * (h / hp))
             else {
                 return false;
             };
-            *a + k * b < T::zero()
+            a + k * b < T::zero()
         })
     }
 
@@ -132,7 +311,7 @@ impl<T: Real> Twin<T> {
     /// evaluated state (accelerations included): a catch's `d·(α_lever − α_shaft)`, the
     /// shaft stop's `-d·α_shaft` (the catch's tolerance taken as constant).
     pub(super) fn guard_rates_of(&self, slot: &Slot<T>, links: &[LinkState<T>; 9]) -> Guards<T> {
-        let mut r = [None; 6];
+        let mut r = Guards::NONE;
         if !self.settings.clutch {
             return r;
         }
@@ -141,11 +320,12 @@ impl<T: Real> Twin<T> {
         let shaft = shaft_accel(mode, links);
         for (k, ((_, lever), clutch)) in BRANCHES.iter().zip(mode.clutches()).enumerate() {
             if clutch == Clutch::Free {
-                r[k] = Some(d * (links.get(*lever).map_or(T::zero(), |s| s.alpha) - shaft));
+                *r.get_mut(Guard::catch(k)) =
+                    Some(d * (links.get(*lever).map_or(T::zero(), |s| s.alpha) - shaft));
             }
         }
         if mode.shaft_turning() {
-            r[5] = Some(-d * shaft);
+            r.shaft_stop = Some(-d * shaft);
         }
         r
     }
@@ -158,7 +338,7 @@ impl<T: Real> Twin<T> {
         c: &[T; 2],
         inputs: &Inputs<T>,
     ) -> Guards<T> {
-        let mut g = [None; 6];
+        let mut g = Guards::NONE;
         if !self.settings.clutch {
             return g;
         }
@@ -183,20 +363,20 @@ impl<T: Real> Twin<T> {
         for (k, ((_, lever), clutch)) in BRANCHES.iter().zip(mode.clutches()).enumerate() {
             let w = links.get(*lever).map_or(T::zero(), |s| s.omega);
             match clutch {
-                Clutch::Free => g[k] = Some(d * (w - shaft) - w_tol),
+                Clutch::Free => *g.get_mut(Guard::catch(k)) = Some(d * (w - shaft) - w_tol),
                 Clutch::Locked => {
-                    g[2 + k] = Some(-(c[k] + c_tol));
+                    *g.get_mut(Guard::release(k)) = Some(-(c[k] + c_tol));
                     locked += c[k];
                     any_locked = true;
                 }
-                Clutch::Engaged => g[2 + k] = Some(-(c[k] + c_tol)),
+                Clutch::Engaged => *g.get_mut(Guard::release(k)) = Some(-(c[k] + c_tol)),
             }
         }
         if any_locked {
-            g[4] = Some(locked - inputs.load);
+            g.breakaway = Some(locked - inputs.load);
         }
         if mode.shaft_turning() {
-            g[5] = Some(-d * shaft);
+            g.shaft_stop = Some(-d * shaft);
         }
         g
     }

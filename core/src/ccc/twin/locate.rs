@@ -2,7 +2,7 @@
 //! from the root of an interpolant of the event function.
 
 use super::error::TwinError;
-use super::guards::{EventKind, Guards, SPEED_GUARDS};
+use super::guards::{EventKind, Fired, Guard, Guards};
 use super::settings::*;
 use super::slot::{Inputs, STATE};
 use super::{Twin, Work};
@@ -170,24 +170,21 @@ impl<T: Real> Twin<T> {
         t0: T,
         h: T,
         (g0, r0): (&Guards<T>, &Guards<T>),
-        fired: u8,
+        fired: Fired,
         inputs: &Inputs<T>,
     ) -> Result<(T, EventKind, bool), TwinError> {
-        let pick = |g: &Guards<T>| -> (T, usize) {
-            let mut best = (T::c(f64::NEG_INFINITY), 0);
-            for (k, v) in g.iter().enumerate() {
-                if fired & (1 << k) != 0 {
-                    if let Some(v) = v {
-                        if *v > best.0 {
-                            best = (*v, k);
-                        }
-                    }
+        // The largest of the fired functions (the first of equals) and its value.
+        let pick = |g: &Guards<T>| -> (T, Guard) {
+            let mut best = (T::c(f64::NEG_INFINITY), Guard::Catch6);
+            for (k, v) in g.watched() {
+                if fired.contains(k) && v > best.0 {
+                    best = (v, k);
                 }
             }
             best
         };
         // The caller evaluates the state at the event in full after this.
-        let speeds_only = fired & !SPEED_GUARDS == 0;
+        let speeds_only = fired.speeds_only();
         let (mut lo, mut hi) = (T::zero(), T::one());
         let (mut glo, _) = pick(g0);
         let (mut ghi, mut which) = pick(&self.guards);
@@ -196,31 +193,32 @@ impl<T: Real> Twin<T> {
         // THETA_TOL, or 8 ulps of the step's fraction if that is larger (f32: 9.5e-7),
         // so that the margin below moves the point by a few ulps at least.
         let tol = T::c(THETA_TOL).max(T::EPS * T::c(8.0));
-        let k = fired.trailing_zeros() as usize;
-        let single = fired.count_ones() == 1;
+        let first = fired.first();
+        let single = fired.single();
         let before = self
             .last_guards
-            .and_then(|(g, hp)| g.get(k).copied().flatten().map(|v| (v, hp / h)));
+            .zip(first)
+            .and_then(|((g, hp), k)| g.get(k).map(|v| (v, hp / h)));
         // Two points this close to each other bracket... or not, but their secant
         // places the crossing to about near²·|g''/g'| (θ units), 1e-10 in f64 for a
         // curvature |g''/g'| of 1 per step: far below `tol`.
         let near = (tol * T::c(0.01)).sqrt();
-        let guess = match (
-            g0.get(k),
-            self.guards.get(k),
-            r0.get(k),
-            self.guard_rates.get(k),
-        ) {
-            (Some(Some(a)), Some(Some(b)), Some(Some(ra)), Some(Some(rb)))
-                if single && speeds_only =>
-            {
-                hermite_root(*a, *b, *ra * h, *rb * h, before, tol)
+        let guess = single.and_then(|k| {
+            match (
+                g0.get(k),
+                self.guards.get(k),
+                r0.get(k),
+                self.guard_rates.get(k),
+            ) {
+                (Some(a), Some(b), Some(ra), Some(rb)) if speeds_only => {
+                    hermite_root(a, b, ra * h, rb * h, before, tol)
+                }
+                (Some(a), Some(b), _, _) if !speeds_only => {
+                    before.and_then(|(gm, r)| quadratic_root(gm, r, a, b, tol))
+                }
+                _ => None,
             }
-            (Some(Some(a)), Some(Some(b)), _, _) if single && !speeds_only => {
-                before.and_then(|(gm, r)| quadratic_root(gm, r, *a, *b, tol))
-            }
-            _ => None,
-        };
+        });
         let mut at_hi = false;
         let mut used = 0;
         // The last evaluated point (θ, its event function, not Illinois-scaled), and
@@ -344,18 +342,11 @@ impl<T: Real> Twin<T> {
             }
         }
         log::debug!(
-            "event functions {fired:#08b}: located to {:?} of the step in {used} evaluations",
+            "event functions {:#08b}: located to {:?} of the step in {used} evaluations",
+            fired.bits(),
             hi - lo
         );
-        let kind = match which {
-            0 => EventKind::Catch(6),
-            1 => EventKind::Catch(8),
-            2 => EventKind::Release(6),
-            3 => EventKind::Release(8),
-            4 => EventKind::Breakaway,
-            _ => EventKind::ShaftStop,
-        };
-        Ok((hi, kind, at_hi))
+        Ok((hi, which.event(), at_hi))
     }
 }
 

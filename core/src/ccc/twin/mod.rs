@@ -41,7 +41,7 @@ use crate::integrator::Dp5;
 use crate::scalar::{Real, Vec2};
 use audit::audit_finite;
 use coordinates::best_slot;
-use guards::{fired, Guards};
+use guards::Guards;
 use nalgebra::SVector;
 use slot::{unwrap_near, Equations, Slot, QD, STATE};
 use slots::Slots;
@@ -188,8 +188,8 @@ impl<T: Real> Twin<T> {
             shaft_angle: T::zero(),
             c: [T::zero(); 2],
             joints: [Vec2::zeros(); 11],
-            guards: [None; 6],
-            guard_rates: [None; 6],
+            guards: Guards::NONE,
+            guard_rates: Guards::NONE,
             last_guards: None,
             audit: Audit::default(),
             events: heapless::Vec::new(),
@@ -317,7 +317,7 @@ impl<T: Real> Twin<T> {
             // The torque functions jump with the load: no earlier sample fits.
             self.last_guards = None;
             self.finish(w, inputs)?;
-            if self.settings.clutch && self.guards.iter().flatten().any(|g| *g > T::zero()) {
+            if self.settings.clutch && self.guards.any_past() {
                 self.choose(w, EventKind::Inputs, inputs)?;
             }
         }
@@ -367,14 +367,14 @@ impl<T: Real> Twin<T> {
             // at its rate at the start).
             let may_defer = self.settings.clutch
                 && events < MAX_EVENTS_PER_STEP
-                && g0.iter().zip(r0.iter()).any(|(g, r)| match (g, r) {
-                    (Some(g), Some(r)) => *g + T::c(4.0) * h * r.abs() > T::zero(),
-                    _ => false,
+                && g0.speed_guards().any(|(k, g)| {
+                    r0.get(k)
+                        .is_some_and(|r| g + T::c(4.0) * h * r.abs() > T::zero())
                 });
             self.finish_step(w, inputs, may_defer.then_some((&g0, h)))?;
-            let fired = fired(&g0, &self.guards);
-            if fired == 0 || events >= MAX_EVENTS_PER_STEP || !self.settings.clutch {
-                self.last_guards = (fired == 0).then_some((g0, h));
+            let fired = g0.fired(&self.guards);
+            if fired.is_empty() || events >= MAX_EVENTS_PER_STEP || !self.settings.clutch {
+                self.last_guards = fired.is_empty().then_some((g0, h));
                 continue;
             }
             events += 1;
