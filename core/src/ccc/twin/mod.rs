@@ -230,7 +230,7 @@ impl<T: Real> Twin<T> {
     pub fn step(&mut self, inputs: &Inputs<T>) -> Result<(), TwinError> {
         check_inputs(inputs)?;
         let changed = !same_inputs(&self.inputs, inputs);
-        let saved = (self.group_unknowns(), self.group_trig());
+        let saved = self.slots.cur().ws.warm_start();
         // The last good step's log: an attempt rewrites it. Usually empty (events and
         // switches are rare), so the copy costs next to nothing.
         let log = (
@@ -332,7 +332,7 @@ impl<T: Real> Twin<T> {
             }
             let t0 = w.t;
             let y0 = w.y;
-            let saved = self.group_unknowns();
+            let saved = self.slots.cur().ws.unknowns();
             // The last sub-step takes what is left (no sliver of a step from rounding).
             let h = if t_end - t0 > h_max * T::c(1.5) {
                 h_max
@@ -349,7 +349,7 @@ impl<T: Real> Twin<T> {
                 Err(e) => {
                     // Warm starts only: the step goes on from here (the cosines
                     // and sines are taken anew from these unknowns).
-                    self.set_group_unknowns(&saved, None);
+                    self.slots.cur_mut().ws.restore_unknowns(&saved);
                     w.t = t0;
                     w.y = y0;
                     if retries >= MAX_RETRIES || !matches!(e, StepError::Group { .. }) {

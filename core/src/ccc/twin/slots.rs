@@ -1,17 +1,10 @@
-//! The twin's working slots and their roles, and the groups' warm starts.
+//! The twin's working slots and their roles.
 
 use super::super::params::CccParams;
 use super::slot::Slot;
 use super::{Twin, Work};
-use crate::scalar::{Real, Vec2};
-use crate::structomat::GroupData;
-
-/// Each group's unknowns, as a step found them.
-pub(super) type GroupUnknowns<T> = [[T; crate::config::MAX_GROUP_VARS]; crate::config::MAX_GROUPS];
-
-/// Their cosines and sines (`GroupData::trig`).
-pub(super) type GroupTrig<T> =
-    [[Vec2<T>; crate::config::MAX_GROUP_VARS]; crate::config::MAX_GROUPS];
+use crate::scalar::Real;
+use crate::workspace::WarmStart;
 
 /// The twin's three working slots (30 KB each in f64) and their roles: the current
 /// slot, the backup (the pre-step slot once a step changed the current one, see
@@ -105,13 +98,13 @@ impl<T: Real> Twin<T> {
     }
 
     /// Back to the state before the step: the pre-step slot (kept by
-    /// [`Twin::take_candidate`] if the step changed it) with its group unknowns and
-    /// their cosines and sines `saved`.
-    pub(super) fn restore(&mut self, switched: bool, saved: &(GroupUnknowns<T>, GroupTrig<T>)) {
+    /// [`Twin::take_candidate`] if the step changed it) with its groups' warm starts
+    /// `saved`.
+    pub(super) fn restore(&mut self, switched: bool, saved: &WarmStart<T>) {
         if switched {
             self.slots.role.swap(0, 1);
         }
-        self.set_group_unknowns(&saved.0, Some(&saved.1));
+        self.slots.cur_mut().ws.restore_warm_start(saved);
         self.dp5.invalidate();
         self.last_guards = None;
         let mut w = self.work_from_state();
@@ -119,42 +112,5 @@ impl<T: Real> Twin<T> {
         // workspace would merely hold the failed evaluation.
         let inputs = self.inputs;
         let _ = self.finish(&mut w, &inputs);
-    }
-
-    pub(super) fn group_unknowns(&self) -> GroupUnknowns<T> {
-        self.per_group(|g| g.x)
-    }
-
-    pub(super) fn group_trig(&self) -> GroupTrig<T> {
-        self.per_group(|g| g.trig)
-    }
-
-    /// `field` of each group's data in the current slot's workspace.
-    pub(super) fn per_group<X: Default>(
-        &self,
-        field: impl Fn(&GroupData<T>) -> X,
-    ) -> [X; crate::config::MAX_GROUPS] {
-        let ws = &self.slots.cur().ws;
-        core::array::from_fn(|k| ws.group.get(k).map_or_else(X::default, &field))
-    }
-
-    /// Sets the groups' unknowns `x` and, if given, their cosines and sines (those of
-    /// `x`, saved with them: a re-evaluation then reproduces the saved state's bits).
-    pub(super) fn set_group_unknowns(&mut self, x: &GroupUnknowns<T>, trig: Option<&GroupTrig<T>>) {
-        for (k, (g, x)) in self
-            .slots
-            .cur_mut()
-            .ws
-            .group
-            .iter_mut()
-            .zip(x.iter())
-            .enumerate()
-        {
-            g.x = *x;
-            if let Some(cs) = trig.and_then(|t| t.get(k)) {
-                g.trig = *cs;
-                g.trig_at = *x;
-            }
-        }
     }
 }
