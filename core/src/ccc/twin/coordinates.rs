@@ -203,7 +203,7 @@ impl<T: Real> Twin<T> {
         let omega: [T; 9] = core::array::from_fn(|p| links[p].omega);
         load_state(self.slots.cur(), &q, &omega, &mut w.y);
         self.dp5.invalidate();
-        self.finish(w, inputs)?;
+        self.restart_at(w, inputs)?;
         let after = self.slots.cur().links(&self.params);
         let position_gap = joint_gap(&self.params, &links, &after);
         let speed_gap = (1..9).fold(T::zero(), |e, p| {

@@ -2,6 +2,7 @@
 //! from the root of an interpolant of the event function.
 
 use super::error::TwinError;
+use super::evaluate::{Stage, Torques};
 use super::guards::{EventKind, Fired, Guard, Guards};
 use super::settings::*;
 use super::slot::{Inputs, STATE};
@@ -294,7 +295,7 @@ impl<T: Real> Twin<T> {
                 self.guards = self.guards_of(self.slots.cur(), &links, &self.c, inputs);
             } else {
                 // A point of the bracket, not where the step goes on from: no seed.
-                self.evaluate_at(w, inputs)?;
+                self.evaluate_from(Stage::Motion, w, inputs, Torques::Kinetostatics)?;
             }
             let (g, k) = pick(&self.guards);
             at_hi = g > T::zero();

@@ -41,6 +41,7 @@ use crate::integrator::Dp5;
 use crate::scalar::{Real, Vec2};
 use audit::audit_finite;
 use coordinates::best_slot;
+use evaluate::{Stage, TorqueSource, Torques};
 use guards::Guards;
 use nalgebra::SVector;
 use slot::{unwrap_near, Equations, Slot, QD, STATE};
@@ -76,17 +77,9 @@ pub struct Twin<T: Real> {
     events: heapless::Vec<Event<T>, MAX_EVENTS_PER_STEP>,
     switches: heapless::Vec<CoordinateSwitch<T>, { MAX_RETRIES + 1 }>,
     candidates: heapless::Vec<(Mode, T), 8>,
-    speed_gap: T,
-    /// `c` came from the mode choice's screen (see [`Twin::try_candidate`]), or is the
-    /// last one's, the kinetostatics deferred at a speed event (see
-    /// [`Twin::finish_step`]), not from the current slot's kinetostatics: a state is
-    /// committed only with the latter, which a re-evaluation of it (after a failed
-    /// step) reproduces.
-    c_screened: bool,
-    /// The last candidate [`Twin::try_candidate`] judged is the reference model itself
-    /// (I0, evaluated at the candidate's state), not the scratch slot: taking it swaps
-    /// the two.
-    cand_in_reference: bool,
+    /// Where `c` came from: a state is committed only with the current slot's own
+    /// kinetostatics.
+    torque_source: TorqueSource,
 }
 
 /// The working state of a step, committed only when the whole step succeeds.
@@ -195,9 +188,7 @@ impl<T: Real> Twin<T> {
             events: heapless::Vec::new(),
             switches: heapless::Vec::new(),
             candidates: heapless::Vec::new(),
-            speed_gap: T::zero(),
-            c_screened: false,
-            cand_in_reference: false,
+            torque_source: TorqueSource::Kinetostatics,
         };
         for (p, l) in twin.links.iter_mut().enumerate() {
             l.theta = pose[p];
@@ -209,7 +200,7 @@ impl<T: Real> Twin<T> {
             switched: false,
             chosen: false,
         };
-        twin.finish(&mut w, &inputs)?;
+        twin.restart_at(&w, &inputs)?;
         if settings.clutch {
             twin.choose(&mut w, EventKind::Start, &inputs)?;
         }
@@ -316,7 +307,7 @@ impl<T: Real> Twin<T> {
             // Inputs changed: re-evaluate here and see whether the mode still holds.
             // The torque functions jump with the load: no earlier sample fits.
             self.last_guards = None;
-            self.finish(w, inputs)?;
+            self.restart_at(w, inputs)?;
             if self.settings.clutch && self.guards.any_past() {
                 self.choose(w, EventKind::Inputs, inputs)?;
             }
@@ -327,7 +318,7 @@ impl<T: Real> Twin<T> {
             if self.slots.cur().mode == Mode::Jam {
                 // At rest: nothing moves until the inputs make another mode consistent.
                 w.t = t_end;
-                self.finish(w, inputs)?;
+                self.restart_at(w, inputs)?;
                 break;
             }
             let t0 = w.t;
@@ -356,7 +347,7 @@ impl<T: Real> Twin<T> {
                         return Err(self.physical_error(e));
                     }
                     retries += 1;
-                    self.finish(w, inputs)?;
+                    self.restart_at(w, inputs)?;
                     self.switch_coordinates(w, inputs, Some(e))?;
                     continue;
                 }
@@ -371,7 +362,12 @@ impl<T: Real> Twin<T> {
                     r0.get(k)
                         .is_some_and(|r| g + T::c(4.0) * h * r.abs() > T::zero())
                 });
-            self.finish_step(w, inputs, may_defer.then_some((&g0, h)))?;
+            let torques = if may_defer {
+                Torques::DeferAtSpeedEvent(&g0, h)
+            } else {
+                Torques::Kinetostatics
+            };
+            self.evaluate_from(Stage::Accelerations, w, inputs, torques)?;
             let fired = g0.fired(&self.guards);
             if fired.is_empty() || events >= MAX_EVENTS_PER_STEP || !self.settings.clutch {
                 self.last_guards = fired.is_empty().then_some((g0, h));

@@ -107,10 +107,10 @@ impl<T: Real> Twin<T> {
         self.slots.cur_mut().ws.restore_warm_start(saved);
         self.dp5.invalidate();
         self.last_guards = None;
-        let mut w = self.work_from_state();
+        let w = self.work_from_state();
         // It evaluated at this very state before: this cannot fail, and if it did the
         // workspace would merely hold the failed evaluation.
         let inputs = self.inputs;
-        let _ = self.finish(&mut w, &inputs);
+        let _ = self.restart_at(&w, &inputs);
     }
 }
