@@ -192,3 +192,120 @@ impl<T: Real> Twin<T> {
         Some((self.violation(m, from, &c, &links, inputs, tol_w), c))
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::super::super::mode::Mode;
+    use super::super::super::params::CccParams;
+    use super::super::slot::{Inputs, LinkState, MotorInput};
+    use super::super::{Twin, TwinSettings};
+    use super::torques_clear;
+
+    fn inputs(load: f64) -> Inputs<f64> {
+        Inputs {
+            motor: MotorInput::Torque(0.0),
+            load,
+            measured: None,
+        }
+    }
+
+    /// The reference twin (drive clockwise: d = -1); only its drive direction is read.
+    fn twin() -> Twin<f64> {
+        Twin::new(
+            CccParams::reference(),
+            TwinSettings::reference(1e-4),
+            inputs(100.0),
+        )
+        .unwrap()
+    }
+
+    /// Links at rest, lever `lever` with angular speed `w` and acceleration `a`.
+    fn links(lever: usize, w: f64, a: f64) -> [LinkState<f64>; 9] {
+        let mut l = [LinkState::default(); 9];
+        l[lever].omega = w;
+        l[lever].alpha = a;
+        l
+    }
+
+    /// SPEC 3's conditions on hand-built states with known answers: a locked lever's
+    /// clutch pushes in the drive direction (c ≥ 0), the held shaft's locked torque
+    /// stays under T_r, a free lever touching the shaft does not accelerate past it in
+    /// the drive direction, a shaft starting from rest turns in the drive direction.
+    /// Each violation is its excess over the scale (T_r + 1 + |c6| + |c8| for torques,
+    /// the largest |α| for accelerations), up to the thresholds (1e-9 of the scale).
+    #[test]
+    fn the_consistency_conditions_on_hand_built_states() {
+        let tw = twin();
+        let d = -1.0; // clockwise
+        let tol_w = 1e-6;
+        let at_rest = [LinkState::default(); 9];
+        let close = |a: f64, b: f64| (a - b).abs() <= 1e-8 * (1.0 + b.abs());
+        let v = |m, from, c: [f64; 2], l: &[LinkState<f64>; 9], load| {
+            tw.violation(m, from, &c, l, &inputs(load), tol_w)
+        };
+        // A locked lever (I6): c6 = +5 N·m holds, c6 = -5 N·m pulls: violates by 5/106.
+        assert_eq!(v(Mode::I6, Mode::I0, [5.0, 0.0], &at_rest, 100.0), 0.0);
+        assert!(close(
+            v(Mode::I6, Mode::I0, [-5.0, 0.0], &at_rest, 100.0),
+            5.0 / 106.0
+        ));
+        // The held shaft: c6 = 150 N·m against T_r = 100 N·m breaks away: 50/251.
+        assert!(close(
+            v(Mode::I6, Mode::I0, [150.0, 0.0], &at_rest, 100.0),
+            50.0 / 251.0
+        ));
+        assert_eq!(v(Mode::I6, Mode::I0, [99.0, 0.0], &at_rest, 100.0), 0.0);
+        // An engaged lever (A6) with the shaft turning carries any c ≥ 0 (no T_r bound).
+        assert_eq!(v(Mode::A6, Mode::A6, [500.0, 0.0], &at_rest, 100.0), 0.0);
+        // A free lever touching the held shaft (I0, ω6 = 0): accelerating in the drive
+        // direction (d·α6 = 2 > 0) overruns it: 2/2 of the α scale; the other way is fine.
+        assert!(close(
+            v(Mode::I0, Mode::I0, [0.0; 2], &links(6, 0.0, 2.0 * d), 0.0),
+            1.0
+        ));
+        assert_eq!(
+            v(Mode::I0, Mode::I0, [0.0; 2], &links(6, 0.0, -2.0 * d), 0.0),
+            0.0
+        );
+        // Not touching (ω6 off the shaft's by 1 rad/s): no condition on its α.
+        assert_eq!(
+            v(Mode::I0, Mode::I0, [0.0; 2], &links(6, 1.0, 2.0 * d), 0.0),
+            0.0
+        );
+        // The shaft starting from rest with lever 6 (I6 -> A6): α_s = α6 must be in the
+        // drive direction; against it (d·α6 = -3) violates by 3/3. Lever 8, free and at
+        // rest, touches the shaft there too and then passes it (d·(α8 - α_s) = 3): 3/3
+        // more; moving off the shaft (ω8 = 1 rad/s) it is free of the condition.
+        assert_eq!(
+            v(Mode::A6, Mode::I6, [1.0, 0.0], &links(6, 0.0, 3.0 * d), 0.0),
+            0.0
+        );
+        assert!(close(
+            v(
+                Mode::A6,
+                Mode::I6,
+                [1.0, 0.0],
+                &links(6, 0.0, -3.0 * d),
+                0.0
+            ),
+            2.0
+        ));
+        let mut off = links(6, 0.0, -3.0 * d);
+        off[8].omega = 1.0;
+        assert!(close(v(Mode::A6, Mode::I6, [1.0, 0.0], &off, 0.0), 1.0));
+    }
+
+    /// The screen's torques stand for the kinetostatics' only when clear of the
+    /// thresholds by the screen's margin (1e-6 of the scale): a lever just above 0, or
+    /// a held shaft just under T_r, is left to its own model.
+    #[test]
+    fn screened_torques_are_clear_only_away_from_the_thresholds() {
+        let i = inputs(100.0);
+        assert!(torques_clear(Mode::I6, &[5.0, 0.0], &i));
+        assert!(!torques_clear(Mode::I6, &[1e-7, 0.0], &i));
+        assert!(!torques_clear(Mode::I6, &[100.0 - 1e-6, 0.0], &i));
+        assert!(torques_clear(Mode::A6, &[500.0, 0.0], &i));
+        assert!(!torques_clear(Mode::A68, &[5.0, -1.0], &i));
+        assert!(torques_clear(Mode::I0, &[0.0, 0.0], &i));
+    }
+}
