@@ -2,13 +2,16 @@
 //! events located inside the step from the dense output, the new mode chosen by SPEC 3's
 //! consistency conditions, plastic impacts, and coordinate switches at dead points.
 //!
-//! Work per step is bounded: at most [`MAX_EVENTS_PER_STEP`] events, each located in at
-//! most [`MAX_LOCATE_ITER`] evaluations and settled by at most 7 candidate modes; at
-//! most [`MAX_RETRIES`] coordinate switches after a failed sub-step. When a step holds
-//! more events than the bound, the rest of the step is integrated in the last mode
-//! chosen and the pending sign changes are handled at the start of the next step (the
-//! event functions are re-checked there): no event is lost, it is late by under one
-//! step, and the twin cannot chatter.
+//! The rooms, one idea each: the step itself ([`Twin::step`], here); its settings,
+//! bounds and thresholds (`settings.rs`); its errors (`error.rs`); the event functions
+//! (`guards.rs`) and their location inside a step (`locate.rs`); the mode choice at an
+//! event (`choice.rs`) by the consistency conditions (`consistency.rs`) and the
+//! plastic impact (`impact.rs`); coordinate choice and switching (`coordinates.rs`);
+//! one mode's model and workspace (`slot.rs`), the three working slots (`slots.rs`) and
+//! their staged evaluation (`evaluate.rs`); the energy audit (`audit.rs`).
+//!
+//! The twin's contract (bounded work, no allocation, size, step sizes, placement in
+//! firmware) is on [`Twin`].
 
 mod audit;
 mod choice;
@@ -47,7 +50,55 @@ use nalgebra::SVector;
 use slot::{unwrap_near, Equations, Slot, QD, STATE};
 use slots::Slots;
 
-/// The twin of one converter.
+/// The twin of one converter: its parameters, settings and state, and the working
+/// models of its modes.
+///
+/// # Contract
+///
+/// **Bounded work per step.** A step is at most [`SUBSTEPS`]`.len()` attempts (1, 4 and
+/// 16 DP5 steps between events: 21 steps' work in all), each with at most
+/// [`MAX_EVENTS_PER_STEP`] events, each located in at most [`MAX_LOCATE_ITER`]
+/// evaluations and settled by at most 7 candidate modes of at most 3 coordinate choices
+/// each, and at most [`MAX_RETRIES`] coordinate switches after a failed sub-step. Every
+/// evaluation's groups solve in closed form or by Newton-Raphson in at most
+/// [`NEWTON_MAX_ITER`](crate::config::NEWTON_MAX_ITER) iterations (a group that does not
+/// converge fails the evaluation); the event root finders stop after 40 iterations. When a step holds more events than the bound, the rest of the step is
+/// integrated in the last mode chosen and the pending sign changes are handled at the
+/// start of the next step (the event functions are re-checked there): no event is
+/// lost, it is late by under one step, and the twin cannot chatter.
+///
+/// **No allocation, no panic.** All state is inline (`heapless` vectors for the logs of
+/// a step); no indexing on the step path can panic, and a failed step returns an error
+/// and keeps the last good state.
+///
+/// **Size.** `size_of::<Twin<f64>>()` is 125 640 B (122.7 KiB), `Twin<f32>` 64 720 B
+/// (63.2 KiB): three working slots and the reference model, each a model and a
+/// workspace (`tests/footprint.rs` asserts the budgets: 128 KiB and 64 KiB). A step's
+/// stack high-water is about 12 KB in f64 and 7 KB in f32 (S2, events included).
+///
+/// **Step sizes.** h = 1e-4 s is the reference in f64 (S2's events within 1e-6 s of
+/// h = 5e-5 s); h = 2e-4 s is the recommended f32 step (the largest with no step
+/// redone in sub-steps on S2, half the work of 1e-4 s).
+///
+/// **In firmware** the twin is far too large for a stack: place it in a `static`, e.g.
+/// a `static TWIN: Mutex<RefCell<Option<Twin<f32>>>>` (`critical-section`'s or
+/// `cortex-m`'s `Mutex`) borrowed inside a critical section, or a `static mut` reached
+/// only from one context. [`Twin::new`] returns the twin by value, so building it
+/// needs its size of stack once: do it at start-up, before the control loop, and
+/// move it into the static; then call [`Twin::step`] on the static's twin only.
+///
+/// # Example
+///
+/// ```
+/// use structomat::ccc::{CccParams, Inputs, MotorInput, Twin, TwinSettings};
+/// let inputs = Inputs { motor: MotorInput::Torque(20.0), load: 0.0, measured: None };
+/// let mut twin = Twin::new(CccParams::<f64>::reference(), TwinSettings::reference(1e-4), inputs)
+///     .expect("the reference converter assembles");
+/// for _ in 0..10 {
+///     twin.step(&inputs).expect("a step of S2's start");
+/// }
+/// assert_eq!(twin.steps(), 10);
+/// ```
 #[derive(Clone, Debug)]
 pub struct Twin<T: Real> {
     params: CccParams<T>,
@@ -527,7 +578,7 @@ impl<T: Real> Twin<T> {
         self.c
     }
 
-    /// Reactions at the physical joints ([`JOINTS`](super::slot::JOINTS)), N.
+    /// Reactions at the physical joints ([`JOINTS`]), N.
     pub fn joint_reactions(&self) -> &[Vec2<T>; 11] {
         &self.joints
     }
