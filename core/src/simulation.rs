@@ -2,14 +2,14 @@
 //! Dormand-Prince integrator (SPEC 1, thesis 5.2). Each [`Simulation::step`] either
 //! advances the state or returns an error and keeps the last good state.
 
-use crate::config::{MAX_DOF, MAX_GROUPS, MAX_GROUP_VARS, STATE_DIM};
+use crate::config::{MAX_DOF, STATE_DIM};
 use crate::dynamics::{energy, finish_accelerations, forward, generalized_accelerations, Energy};
 use crate::error::{ModelError, StepError};
 use crate::integrator::{Adaptive, AdaptiveError, AdaptiveStats, Dp5, OdeSystem};
 use crate::kinematics::assemble;
 use crate::kinetostatics::reactions;
 use crate::model::Model;
-use crate::scalar::{Real, Vec2};
+use crate::scalar::Real;
 use crate::workspace::Workspace;
 use core::fmt;
 use nalgebra::SVector;
@@ -189,8 +189,7 @@ impl<T: Real> Simulation<T> {
     ) -> Result<R, E> {
         // The groups' unknowns with their cosines and sines (`GroupData::trig`): a
         // step taken back restores both, so its re-evaluation reproduces the state.
-        let saved: [([T; MAX_GROUP_VARS], [Vec2<T>; MAX_GROUP_VARS]); MAX_GROUPS] =
-            core::array::from_fn(|k| (self.ws.group[k].x, self.ws.group[k].trig));
+        let saved = self.ws.warm_start();
         let t_next = T::c((self.steps + 1) as f64) * self.h;
         if !t_next.finite() {
             return Err(wrap(StepError::NonFinite {
@@ -225,12 +224,7 @@ impl<T: Real> Simulation<T> {
                     self.y = y0;
                     self.dp5.invalidate();
                 }
-                for (gd, (x, trig)) in self.ws.group.iter_mut().zip(saved.iter()) {
-                    gd.x = *x;
-                    gd.trig = *trig;
-                    // The saved cosines and sines were those of the saved unknowns.
-                    gd.trig_at = *x;
-                }
+                self.ws.restore_warm_start(&saved);
                 // Re-evaluate at the last good state (it evaluated before, from the same
                 // warm start): the workspace describes the state again.
                 let m = self.model.dof();

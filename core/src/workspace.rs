@@ -2,7 +2,9 @@
 //! workspace per simulation (and per thread); algorithms are functions over
 //! `(&Model, &mut Workspace)`.
 
-use crate::config::{MAX_BODIES, MAX_DOF, MAX_DRIVES, MAX_GROUPS, MAX_GROUP_JOINTS, POSE_ROWS};
+use crate::config::{
+    MAX_BODIES, MAX_DOF, MAX_DRIVES, MAX_GROUPS, MAX_GROUP_JOINTS, MAX_GROUP_VARS, POSE_ROWS,
+};
 use crate::scalar::{Real, Vec2};
 use crate::structomat::GroupData;
 use nalgebra::{SMatrix, SVector};
@@ -53,6 +55,21 @@ pub struct Reaction<T: Real> {
     /// Moment on `i` from `j`, N·m: the reaction moment of a prismatic joint, or the
     /// driving torque of a motor element R.
     pub moment: T,
+}
+
+/// Each group's unknowns (rad or m), in sequence order: the warm start of its
+/// Newton-Raphson.
+pub type GroupUnknowns<T> = [[T; MAX_GROUP_VARS]; MAX_GROUPS];
+
+/// The groups' warm starts as an evaluation left them: each group's unknowns and their
+/// cosines and sines ([`GroupData::trig`]). Restored together, a re-evaluation of the
+/// state they were saved at reproduces its bits; a step taken back restores them.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct WarmStart<T: Real> {
+    /// Each group's unknowns.
+    pub unknowns: GroupUnknowns<T>,
+    /// Their cosines and sines.
+    pub trig: [[Vec2<T>; MAX_GROUP_VARS]; MAX_GROUPS],
 }
 
 /// Preallocated buffers of a mechanism's evaluation.
@@ -214,6 +231,49 @@ impl<T: Real> Workspace<T> {
         match (self.body.get(body as usize), model.link(body)) {
             (Some(b), Some(l)) => b.o + crate::scalar::rotate_cs(b.c, b.s, &l.cog),
             _ => Vec2::zeros(),
+        }
+    }
+
+    /// The groups' warm starts, to restore with [`Workspace::restore_warm_start`].
+    pub fn warm_start(&self) -> WarmStart<T> {
+        let mut trig = [[Vec2::zeros(); MAX_GROUP_VARS]; MAX_GROUPS];
+        for (t, g) in trig.iter_mut().zip(self.group.iter()) {
+            *t = g.trig;
+        }
+        WarmStart {
+            unknowns: self.unknowns(),
+            trig,
+        }
+    }
+
+    /// Sets the groups' unknowns and their cosines and sines to `saved` (those of the
+    /// saved unknowns: Newton starts from them as they are).
+    pub fn restore_warm_start(&mut self, saved: &WarmStart<T>) {
+        for (g, (x, trig)) in self
+            .group
+            .iter_mut()
+            .zip(saved.unknowns.iter().zip(saved.trig.iter()))
+        {
+            g.x = *x;
+            g.trig = *trig;
+            g.trig_at = *x;
+        }
+    }
+
+    /// The groups' unknowns alone.
+    pub fn unknowns(&self) -> GroupUnknowns<T> {
+        let mut x = [[T::zero(); MAX_GROUP_VARS]; MAX_GROUPS];
+        for (x, g) in x.iter_mut().zip(self.group.iter()) {
+            *x = g.x;
+        }
+        x
+    }
+
+    /// Sets the groups' unknowns to `x`, leaving their cosines and sines: Newton takes
+    /// them anew from an unknown that moved.
+    pub fn restore_unknowns(&mut self, x: &GroupUnknowns<T>) {
+        for (g, x) in self.group.iter_mut().zip(x.iter()) {
+            g.x = *x;
         }
     }
 }

@@ -10,12 +10,10 @@ pub mod params;
 pub use build::{initial_pose, mode_model};
 pub use mode::{Clutch, Coordinates, Mode};
 pub use params::{Bar, CccParams, DriveDirection, Side};
-mod slot;
 mod twin;
 
-pub use slot::{Inputs, LinkState, MotorInput, JOINTS, JOINT_NAMES};
 pub use twin::{
-    Audit, CoordinateSwitch, Event, EventKind, Failure, Twin, TwinError, TwinSettings,
-    DIODE_HORIZON_STEPS, MAX_EVENTS_PER_STEP, MAX_LOCATE_ITER, MAX_RETRIES, SINGULAR_CONDITIONING,
-    SUBSTEPS,
+    Audit, CoordinateSwitch, Event, EventKind, Failure, Inputs, LinkState, MotorInput, Twin,
+    TwinError, TwinSettings, DIODE_HORIZON_STEPS, JOINTS, JOINT_NAMES, MAX_EVENTS_PER_STEP,
+    MAX_LOCATE_ITER, MAX_RETRIES, SINGULAR_CONDITIONING, SUBSTEPS,
 };

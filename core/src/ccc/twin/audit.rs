@@ -1,0 +1,106 @@
+//! The energy audit (SPEC 3).
+
+use super::error::{Failure, TwinError};
+use super::slot::{physical_energy, LinkState, W_LOAD, W_MOTOR};
+use super::{shaft_speed, Twin, Work};
+use crate::error::{GroupFault, StepError};
+use crate::scalar::Real;
+
+/// The energy audit (SPEC 3): `motor work = Δ(kinetic + potential) + load work + impact
+/// losses`, each term in J since the start.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Audit<T> {
+    /// Work of the motor on the crank.
+    pub motor_work: T,
+    /// Work done against the load on the shaft.
+    pub load_work: T,
+    /// Kinetic energy lost in plastic impacts.
+    pub impact_loss: T,
+    /// Kinetic energy now (links and shaft).
+    pub kinetic: T,
+    /// Potential energy now (gravity).
+    pub potential: T,
+    /// Kinetic plus potential energy at the start.
+    pub initial: T,
+}
+
+impl<T: Real> Audit<T> {
+    /// `motor work - Δ(kinetic + potential) - load work - impact losses`, J.
+    pub fn residual(&self) -> T {
+        self.motor_work
+            - (self.kinetic + self.potential - self.initial)
+            - self.load_work
+            - self.impact_loss
+    }
+}
+
+/// The audit's terms are finite, or the error that says they are not. The works are
+/// integrated with the motion but not checked by its evaluations, and an energy can
+/// overflow at finite speeds (`½ J_s ω²` with a huge J_s): past the scalar's range the
+/// balance test would compare infinities and pass.
+pub(super) fn audit_finite<T: Real>(a: &Audit<T>, t: T) -> Result<(), TwinError> {
+    let terms = [
+        a.motor_work,
+        a.load_work,
+        a.impact_loss,
+        a.kinetic,
+        a.potential,
+        a.initial,
+        a.residual(),
+    ];
+    if terms.iter().all(|x| x.finite()) {
+        Ok(())
+    } else {
+        Err(TwinError::Step(StepError::NonFinite {
+            time: t.to_f64(),
+            what: "the energy audit (a work or an energy overflows the scalar)",
+        }))
+    }
+}
+
+impl<T: Real> Twin<T> {
+    /// The audit at the end of a step in `w` (the slot holds its evaluation).
+    pub(super) fn audit_of(&self, links: &[LinkState<T>; 9], w: &Work<T>) -> Audit<T> {
+        let shaft = shaft_speed(self.slots.cur().mode, links);
+        let frames = self.slots.cur().frames();
+        let (kinetic, potential) = physical_energy(&self.params, links, &frames, shaft);
+        Audit {
+            motor_work: w.y[W_MOTOR],
+            load_work: w.y[W_LOAD],
+            impact_loss: self.audit.impact_loss + w.impact,
+            kinetic,
+            potential,
+            initial: self.audit.initial,
+        }
+    }
+
+    /// The audit at the end of the step in `w` and the physical links it is computed
+    /// from (the state [`Twin::commit`] takes), or an error if its residual moved past
+    /// the tolerance over the step.
+    pub(super) fn check_energy(
+        &self,
+        w: &Work<T>,
+    ) -> Result<(Audit<T>, [LinkState<T>; 9]), TwinError> {
+        let links = self.slots.cur().links(&self.params);
+        let a = self.audit_of(&links, w);
+        audit_finite(&a, w.t)?;
+        let jump = a.residual() - self.audit.residual();
+        let scale = T::one() + a.motor_work.abs() + a.kinetic.abs() + a.potential.abs();
+        if jump.abs() <= self.settings.energy_tol * scale {
+            return Ok((a, links));
+        }
+        let (group, conditioning) = self.slots.cur().worst_group();
+        Err(TwinError::Diverged {
+            time: self.t.to_f64(),
+            mode: self.slots.cur().mode,
+            jump: jump.to_f64(),
+            worst: Failure {
+                coords: self.slots.cur().coords,
+                group,
+                fault: GroupFault::Singular {
+                    conditioning: conditioning.to_f64(),
+                },
+            },
+        })
+    }
+}

@@ -1,0 +1,272 @@
+//! Why the twin could not be set up or step.
+
+use super::super::build::{BRANCHES, ROCKER};
+use super::super::mode::{Coordinates, Mode};
+use super::settings::*;
+use super::slot::physical;
+use super::Twin;
+use crate::error::{GroupFault, GroupId, ModelError, StepError};
+use crate::scalar::Real;
+use core::fmt;
+
+/// A group that failed in one coordinate choice.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Failure {
+    /// The coordinate choice.
+    pub coords: Coordinates,
+    /// The group, in physical link numbers.
+    pub group: GroupId,
+    /// Why.
+    pub fault: GroupFault,
+}
+
+/// Why the twin could not be set up or step. A failed step leaves the last good state.
+#[derive(Clone, Debug, PartialEq)]
+pub enum TwinError {
+    /// A parameter is invalid.
+    Model(ModelError),
+    /// A setting or an input is invalid.
+    Setting(&'static str),
+    /// An evaluation failed (not a group: a non-finite input, a singular mass matrix).
+    Step(StepError),
+    /// Every coordinate choice of the mode fails here: a singularity of the mechanism
+    /// itself (SPEC 3: its constraints lose rank), or a dead point of every choice the
+    /// mode has.
+    Mechanism {
+        /// Time, s.
+        time: f64,
+        /// The mode.
+        mode: Mode,
+        /// The group that fails in each choice.
+        failures: heapless::Vec<Failure, 3>,
+    },
+    /// One step breaks the energy balance past [`TwinSettings::energy_tol`] even in the
+    /// finest [`SUBSTEPS`]: the motion runs into a singularity of the mechanism faster
+    /// than the step can follow (the worst group's conditioning is then near 0), or
+    /// the step is far too coarse for the motion. Names the worst-conditioned group.
+    Diverged {
+        /// Time at the start of the step, s.
+        time: f64,
+        /// The mode.
+        mode: Mode,
+        /// Change of the audit residual over the step, J.
+        jump: f64,
+        /// The worst-conditioned group of the sequence (fault: its conditioning).
+        worst: Failure,
+    },
+    /// A diode branch's rod and lever came in line (stretched, |DH| = rod + lever, or
+    /// folded) and the step could not go on: a singularity of the mechanism itself
+    /// (SPEC 3, the end of S1). The branch's dyad loses rank; with the reference's equal
+    /// branches both come in line at once, G and I meet, and the two branches'
+    /// constraints become one. Replaces the [`TwinError::Mechanism`] or singular
+    /// [`TwinError::Diverged`] error it explains.
+    Diode {
+        /// Time of the last good state, s (the failing step starts there).
+        time: f64,
+        /// The mode.
+        mode: Mode,
+        /// |DH| at the last good state, m.
+        reach: f64,
+        /// Per branch (rod 5 and lever 6, rod 7 and lever 8): |sin| of the angle between
+        /// rod and lever at the last good state (0: in line).
+        sines: [f64; 2],
+        /// Per branch: whether it is named in line: |sin| under
+        /// [`SINGULAR_CONDITIONING`], or closing so fast that it reaches 0 within
+        /// [`DIODE_HORIZON_STEPS`] steps at its present rate.
+        in_line: [bool; 2],
+        /// Per branch: |sin| over its rate of decrease, s (the time to in line at the
+        /// present rate; infinite when it is not closing).
+        closing_in: [f64; 2],
+        /// Rod plus lever of each branch, m (the stretched reach).
+        stretched_reach: [f64; 2],
+    },
+    /// A turning shaft with J_s > 0 would leave both levers and coast: not modelled.
+    Coasting {
+        /// Time, s.
+        time: f64,
+    },
+}
+
+impl fmt::Display for TwinError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            TwinError::Model(e) => write!(f, "converter: {e}"),
+            TwinError::Setting(s) => write!(f, "converter: {s}"),
+            TwinError::Step(e) => write!(f, "{e}"),
+            TwinError::Mechanism {
+                time,
+                mode,
+                failures,
+            } => {
+                write!(
+                    f,
+                    "t = {time:.6} s: mode {mode}: no coordinate choice drives the mechanism here (a singularity of the mechanism, or a dead point of every choice the mode has): "
+                )?;
+                for (k, x) in failures.iter().enumerate() {
+                    let sep = if k == 0 { "" } else { "; " };
+                    write!(f, "{sep}{} coordinates: {} {}", x.coords, x.group, x.fault)?;
+                }
+                Ok(())
+            }
+            TwinError::Diverged {
+                time,
+                mode,
+                jump,
+                worst,
+            } => write!(
+                f,
+                "t = {time:.6} s: mode {mode}: one step breaks the energy balance by {jump:.3e} J even in {} sub-steps: {} (worst group in {} coordinates: {} {})",
+                SUBSTEPS[SUBSTEPS.len() - 1],
+                if self.at_singularity() {
+                    "a singularity of the mechanism is near"
+                } else {
+                    "the step is too coarse for the motion"
+                },
+                worst.coords,
+                worst.group,
+                worst.fault
+            ),
+            TwinError::Diode {
+                time,
+                mode,
+                reach,
+                sines,
+                stretched_reach,
+                in_line,
+                closing_in,
+            } => {
+                write!(
+                    f,
+                    "t = {time:.6} s: mode {mode}: a singularity of the mechanism: the diode's rods and levers in line, "
+                )?;
+                let mut first = true;
+                for (k, (rod, lever)) in BRANCHES.into_iter().enumerate() {
+                    let (Some(sine), Some(full), Some(true), Some(within)) = (
+                        sines.get(k),
+                        stretched_reach.get(k),
+                        in_line.get(k).copied(),
+                        closing_in.get(k),
+                    ) else {
+                        continue;
+                    };
+                    let sep = if first { "" } else { " and " };
+                    let how = if *reach > full * 0.5 {
+                        "stretched"
+                    } else {
+                        "folded"
+                    };
+                    write!(f, "{sep}RRR({rod},{lever}) {how} (|sin| {sine:.1e}")?;
+                    if *sine >= SINGULAR_CONDITIONING {
+                        write!(f, ", in line in {:.2} ms at its rate", within * 1e3)?;
+                    }
+                    f.write_str(")")?;
+                    first = false;
+                }
+                write!(
+                    f,
+                    ", |DH| = {reach:.7} m of rod + lever = {:.7} m: their constraints lose rank, no coordinate choice drives it",
+                    stretched_reach[0]
+                )
+            }
+            TwinError::Coasting { time } => write!(
+                f,
+                "t = {time:.6} s: the shaft would coast free of both levers (J_s > 0), which is not modelled"
+            ),
+        }
+    }
+}
+
+impl core::error::Error for TwinError {}
+
+impl TwinError {
+    /// Whether the twin stopped at a singularity of the mechanism itself (SPEC 3: the
+    /// end of S1), rather than at a bad input, a setting or a step too coarse.
+    pub fn at_singularity(&self) -> bool {
+        match self {
+            TwinError::Mechanism { .. } | TwinError::Diode { .. } => true,
+            TwinError::Diverged { worst, .. } => matches!(
+                worst.fault,
+                GroupFault::Singular { conditioning } if conditioning < SINGULAR_CONDITIONING
+            ),
+            _ => false,
+        }
+    }
+}
+
+impl From<ModelError> for TwinError {
+    fn from(e: ModelError) -> Self {
+        TwinError::Model(e)
+    }
+}
+
+impl<T: Real> Twin<T> {
+    /// [`TwinError::Diode`] if a diode branch's rod and lever are in line at the last
+    /// good state: |sin| of their angle under [`SINGULAR_CONDITIONING`], or closing
+    /// towards 0 fast enough to get there within [`DIODE_HORIZON_STEPS`] steps
+    /// (d|sin Δ|/dt = sign(sin Δ)·cos Δ·(ω_rod − ω_lever), Δ = θ_rod − θ_lever).
+    pub(super) fn diode_in_line(&self) -> Option<TwinError> {
+        let reach = (self.joint_position(ROCKER, 2) - self.params.h).norm();
+        let horizon = DIODE_HORIZON_STEPS * self.h().to_f64();
+        let mut sines = [1.0; 2];
+        let mut stretched_reach = [0.0; 2];
+        let mut in_line = [false; 2];
+        let mut closing_in = [f64::INFINITY; 2];
+        for (k, (rod, lever)) in BRANCHES.into_iter().enumerate() {
+            let (r, l) = (self.link(rod), self.link(lever));
+            let delta = r.theta - l.theta;
+            let (sin, cos) = (delta.sin().to_f64(), delta.cos().to_f64());
+            let rate = sin.signum() * cos * (r.omega - l.omega).to_f64();
+            let sine = sin.abs();
+            let within = if rate < 0.0 {
+                sine / -rate
+            } else {
+                f64::INFINITY
+            };
+            let full = (self.params.link(rod).length + self.params.link(lever).length).to_f64();
+            if let (Some(s), Some(fr), Some(il), Some(ci)) = (
+                sines.get_mut(k),
+                stretched_reach.get_mut(k),
+                in_line.get_mut(k),
+                closing_in.get_mut(k),
+            ) {
+                (*s, *fr, *ci) = (sine, full, within);
+                *il = sine < SINGULAR_CONDITIONING || within < horizon;
+            }
+        }
+        if !in_line.iter().any(|b| *b) {
+            return None;
+        }
+        Some(TwinError::Diode {
+            time: self.t.to_f64(),
+            mode: self.slots.cur().mode,
+            reach: reach.to_f64(),
+            sines,
+            stretched_reach,
+            in_line,
+            closing_in,
+        })
+    }
+
+    pub(super) fn physical_error(&self, e: StepError) -> TwinError {
+        match e {
+            StepError::Group { .. } => {
+                let StepError::Group { time, group, fault } = physical(&self.slots.cur().map, e)
+                else {
+                    return TwinError::Step(e);
+                };
+                let mut failures = heapless::Vec::new();
+                let _ = failures.push(Failure {
+                    coords: self.slots.cur().coords,
+                    group,
+                    fault,
+                });
+                TwinError::Mechanism {
+                    time,
+                    mode: self.slots.cur().mode,
+                    failures,
+                }
+            }
+            e => TwinError::Step(e),
+        }
+    }
+}
