@@ -70,15 +70,6 @@ mod trace;
 pub mod transmission;
 pub mod workspace;
 
-// The twin's records name `log::debug!`, `log::info!` and `log::warn!`: without the
-// feature `log`, that path is this crate's root, where `trace`'s macros stand in (they
-// type-check their arguments and format nothing).
-#[cfg(not(feature = "log"))]
-extern crate self as log;
-#[cfg(not(feature = "log"))]
-#[allow(unused_imports)]
-pub(crate) use trace::{debug, info, warn};
-
 pub use error::{GroupFault, GroupId, ModelError, StepError};
 pub use model::{Link, Model, ModelBuilder};
 pub use scalar::Real;

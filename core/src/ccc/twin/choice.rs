@@ -207,7 +207,7 @@ impl<T: Real> Twin<T> {
                         failures: heapless::Vec::new(),
                     });
                 };
-                log::warn!(
+                crate::trace::warn!(
                     "t = {time:.6} s: no mode is consistent after {}; taking {m} (violation {v:?})",
                     kind.name()
                 );
@@ -251,7 +251,7 @@ impl<T: Real> Twin<T> {
         }
         let after = self.slots.cur().links(&self.params);
         let position_gap = joint_gap(&self.params, &links, &after);
-        log::info!(
+        crate::trace::info!(
             "t = {time:.6} s: {} -> {m} ({}, {} coordinates, impact loss {loss:?} J)",
             from,
             kind.name(),
@@ -335,7 +335,7 @@ impl<T: Real> Twin<T> {
         };
         let links = cand.links(params);
         let c = clear.unwrap_or_else(|| cand.clutch_torques(params, &links));
-        log::debug!(
+        crate::trace::debug!(
             "candidate {m}: c = {:?}, alpha6 = {:?}, alpha8 = {:?}",
             c,
             links[6].alpha,
@@ -557,7 +557,7 @@ impl<T: Real> Twin<T> {
         let q = match cand.reposition(params, m, coords, load.pose, time) {
             Ok(q) => q,
             Err(e) => {
-                log::debug!("candidate {m} in {coords} coordinates does not assemble: {e:?}");
+                crate::trace::debug!("candidate {m} in {coords} coordinates does not assemble: {e:?}");
                 return None;
             }
         };
@@ -570,7 +570,7 @@ impl<T: Real> Twin<T> {
         let mapped = cand.links(params);
         let off = (1..9).fold(T::zero(), |e, p| e.max((mapped[p].omega - omega[p]).abs()));
         if !(off <= speed_tol::<T>() * load.scale_w) {
-            log::debug!("candidate {m} in {coords} coordinates cannot carry the speeds (off by {off:?} rad/s)");
+            crate::trace::debug!("candidate {m} in {coords} coordinates cannot carry the speeds (off by {off:?} rad/s)");
             return None;
         }
         Some(off)

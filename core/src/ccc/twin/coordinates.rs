@@ -209,7 +209,7 @@ impl<T: Real> Twin<T> {
         let speed_gap = (1..9).fold(T::zero(), |e, p| {
             e.max((after[p].omega - links[p].omega).abs())
         });
-        log::info!("t = {time:.6} s: mode {mode}: coordinates {from} -> {coords} (conditioning {now:?} -> {cond:?})");
+        crate::trace::info!("t = {time:.6} s: mode {mode}: coordinates {from} -> {coords} (conditioning {now:?} -> {cond:?})");
         let _ = self.switches.push(CoordinateSwitch {
             time: w.t,
             mode,

@@ -45,7 +45,7 @@ pub(super) fn project<T: Real>(
     u: &SVector<T, 3>,
     rows: &[SVector<T, 3>],
 ) -> Option<(SVector<T, 3>, T)> {
-    let minv = mass.try_inverse()?;
+    let minv = crate::linalg::inverse3(mass)?;
     let n = rows.len();
     // At most the three coordinates' worth of independent constraints.
     if n > 3 {
@@ -63,14 +63,13 @@ pub(super) fn project<T: Real>(
         }
     }
     // Rank: each pivot relative to its row's own weight.
-    let chol = nalgebra::Cholesky::new(gram)?;
-    let l = chol.l();
+    let l = crate::linalg::cholesky(&gram)?;
     for i in 0..n {
         if !(l[(i, i)] * l[(i, i)] > T::c(1e-10) * gram[(i, i)].max(T::EPS)) {
             return None;
         }
     }
-    let lambda = chol.solve(&ju);
+    let lambda = crate::linalg::cholesky_solve(&l, &ju);
     let mut jt_l = SVector::<T, 3>::zeros();
     for (i, ri) in rows.iter().enumerate() {
         jt_l += ri * lambda[i];

@@ -342,7 +342,7 @@ impl<T: Real> Twin<T> {
                 guess = Some(r + margin);
             }
         }
-        log::debug!(
+        crate::trace::debug!(
             "event functions {:#08b}: located to {:?} of the step in {used} evaluations",
             fired.bits(),
             hi - lo
