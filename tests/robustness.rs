@@ -359,6 +359,11 @@ fn check_step_error(e: &StepError) -> Result<(), String> {
             }
         }
         StepError::SingularMassMatrix { .. } => {}
+        StepError::EnergyBalance { .. } => {
+            if !msg.contains("smaller step") {
+                return Err(format!("energy-balance error does not advise: {msg}"));
+            }
+        }
     }
     Ok(())
 }
