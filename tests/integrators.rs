@@ -110,10 +110,13 @@ fn thesis_step_rule_sits_at_h_min() {
     for _ in 0..1000 {
         sim.step().unwrap();
     }
-    // The same method and step: equal up to the rounding of the time grid (the thesis
-    // rule sums t += h, the simulation steps to n·h).
+    // The same method and step, but for the simulation's energy check: it redoes in
+    // sub-steps the 10 steps of the start (the motor's peak torque) that break the
+    // energy balance, which moves the end by 7.9e-6 rad (else equal up to the rounding of
+    // the time grid: the thesis rule sums t += h, the simulation steps to n·h).
+    assert_eq!(sim.balance().redone, 10);
     assert!(
-        (sim.q()[0] - y[0]).abs() < 1e-11,
+        (sim.q()[0] - y[0]).abs() < 2e-5,
         "{} vs {}",
         sim.q()[0],
         y[0]

@@ -177,6 +177,21 @@ pub enum StepError {
         /// What was not finite.
         what: &'static str,
     },
+    /// One fixed step breaks the energy balance (the work of the motors and loads
+    /// against the change of kinetic plus potential energy) past its tolerance even in
+    /// the finest sub-steps ([`balance`](crate::balance)): the step is too large for the
+    /// motion.
+    EnergyBalance {
+        /// Time at the start of the step (the last good state), s.
+        time: f64,
+        /// Work in minus energy gained over the step, J.
+        residual: f64,
+        /// The energy scale of the tolerance, `1 J + |works| + |K| + |V|`, J.
+        scale: f64,
+        /// Sub-steps of the division whose residual this is: the finest that reached
+        /// the step's end (a finer one failed otherwise, or none did).
+        substeps: u32,
+    },
 }
 
 impl StepError {
@@ -185,7 +200,8 @@ impl StepError {
         match *self {
             StepError::Group { time, .. }
             | StepError::SingularMassMatrix { time }
-            | StepError::NonFinite { time, .. } => time,
+            | StepError::NonFinite { time, .. }
+            | StepError::EnergyBalance { time, .. } => time,
         }
     }
 }
@@ -203,6 +219,16 @@ impl fmt::Display for StepError {
             StepError::NonFinite { time, what } => {
                 write!(f, "t = {time:.6} s: {what} is not finite")
             }
+            StepError::EnergyBalance {
+                time,
+                residual,
+                scale,
+                substeps,
+            } => write!(
+                f,
+                "t = {time:.6} s: one step breaks the energy balance by {residual:.3e} J ({:.1e} of the energy scale {scale:.3e} J) even in sub-steps (the residual of {substeps}): the step is too large for the motion; take a smaller step",
+                residual.abs() / scale
+            ),
         }
     }
 }

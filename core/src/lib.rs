@@ -18,6 +18,7 @@
 //! | `(VᵀMV) q̈ = Vᵀ(F - M a_b)` | [`dynamics`] | thesis eq. 4.49 |
 //! | joint reactions, driving torques | [`kinetostatics`] | thesis 3.3 |
 //! | DP5 fixed, thesis-adaptive, adaptive | [`integrator`] | SPEC 1; thesis 5.4 |
+//! | each fixed step's energy balance, sub-steps | [`balance`] | SPEC 3's audit |
 //! | motor laws | [`motor`] | thesis 5.3 |
 //!
 //! No heap, no panics on the step path, bounded iterations, `libm` math everywhere
@@ -52,6 +53,7 @@
 // false with everything, so the negated test catches it where `x <= 0` would not.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+pub mod balance;
 pub mod ccc;
 pub mod config;
 pub mod dynamics;
@@ -70,6 +72,7 @@ mod trace;
 pub mod transmission;
 pub mod workspace;
 
+pub use balance::Balance;
 pub use error::{GroupFault, GroupId, ModelError, StepError};
 pub use model::{Link, Model, ModelBuilder};
 pub use scalar::Real;

@@ -2,6 +2,7 @@
 //! Dormand-Prince integrator (SPEC 1, thesis 5.2). Each [`Simulation::step`] either
 //! advances the state or returns an error and keeps the last good state.
 
+use crate::balance::{audited_step, redo_in_substeps, Balance, LoadPoses};
 use crate::config::{MAX_DOF, STATE_DIM};
 use crate::dynamics::{energy, finish_accelerations, forward, generalized_accelerations, Energy};
 use crate::error::{ModelError, StepError};
@@ -91,6 +92,7 @@ pub struct Simulation<T: Real> {
     y: SVector<T, STATE_DIM>,
     h: T,
     steps: u64,
+    balance: Balance<T>,
 }
 
 impl<T: Real> Simulation<T> {
@@ -117,6 +119,7 @@ impl<T: Real> Simulation<T> {
         assemble(&model, &mut ws, q0).map_err(SetupError::Initial)?;
         forward(&model, &mut ws, T::zero(), q0, qd0).map_err(SetupError::Initial)?;
         check_outputs(&model, &ws, 0.0).map_err(SetupError::Initial)?;
+        let balance = Balance::start(&model, &ws);
         Ok(Simulation {
             model,
             ws,
@@ -125,6 +128,7 @@ impl<T: Real> Simulation<T> {
             y,
             h,
             steps: 0,
+            balance,
         })
     }
 
@@ -137,11 +141,19 @@ impl<T: Real> Simulation<T> {
     /// step: 1.3e-4 s over 1000 steps in `f32`): the step taken is `(n+1)h - t`, exact
     /// by Sterbenz's lemma once `t > 0`, so `t + step` lands on `(n+1)h` and the FSAL
     /// stage stays valid.
+    ///
+    /// The step's energy balance is checked ([`balance`](crate::balance)): a step that
+    /// breaks it is redone in 4, then 16 sub-steps (still landing on `(n+1)h`); one
+    /// that breaks it even so fails with [`StepError::EnergyBalance`].
     pub fn step(&mut self) -> Result<(), StepError> {
-        self.advance(
-            |sys, dp5, t, y, h| dp5.step(sys, t, y, h).map(|_| ()),
-            |e| e,
-        )
+        let start = self.balance;
+        self.balance = redo_in_substeps(|n| {
+            self.advance(
+                |sys, dp5, t, y, h| audited_step(sys, dp5, t, y, h, n, &start),
+                |e| e,
+            )
+        })?;
+        Ok(())
     }
 
     /// Advances to the next output time `(n+1)·h` with the adaptive DP5(4) `adaptive`
@@ -153,11 +165,15 @@ impl<T: Real> Simulation<T> {
     ///
     /// The simulation's own fixed-step integrator forgets its FSAL stage too: mixing
     /// `step` and `step_adaptive` is allowed, each starts from the state.
+    ///
+    /// The interval's energy balance is not checked (the error control keeps it) and
+    /// its motor work is not metered: [`Balance::unaudited`] counts such intervals.
     pub fn step_adaptive(
         &mut self,
         adaptive: &mut Adaptive<T, STATE_DIM>,
     ) -> Result<AdaptiveStats, AdaptiveError<StepError>> {
         self.dp5.invalidate();
+        let poses = LoadPoses::at(&self.model, &self.ws);
         let r = self.advance(
             |sys, _, t, y, h| {
                 let t_end = *t + h;
@@ -165,8 +181,9 @@ impl<T: Real> Simulation<T> {
             },
             AdaptiveError::System,
         );
-        if r.is_err() {
-            adaptive.invalidate();
+        match r {
+            Ok(_) => self.balance.skip(&self.model, &self.ws, &poses, self.h),
+            Err(_) => adaptive.invalidate(),
         }
         r
     }
@@ -271,7 +288,7 @@ impl<T: Real> Simulation<T> {
     pub fn workspace(&self) -> &Workspace<T> {
         &self.ws
     }
-    /// The integrator (its dense output covers the last step).
+    /// The integrator (its dense output covers the last step, or its last sub-step).
     pub fn integrator(&self) -> &Dp5<T, STATE_DIM> {
         &self.dp5
     }
@@ -279,10 +296,18 @@ impl<T: Real> Simulation<T> {
     pub fn energy(&self) -> Energy<T> {
         energy(&self.model, &self.ws)
     }
+    /// The energy balance since the start: the motors' and loads' work, the energies,
+    /// the worst step's relative residual and the sub-steps taken.
+    pub fn balance(&self) -> &Balance<T> {
+        &self.balance
+    }
     /// Joint reactions and driving torques at the current state (kinetostatics), into
-    /// the workspace's `reactions`.
+    /// the workspace's `reactions`; an error if one is not finite (the state has run
+    /// away: forces that overflow the scalar).
     pub fn kinetostatics(&mut self) -> Result<&Workspace<T>, StepError> {
-        reactions(&self.model, &mut self.ws, self.t.to_f64())?;
+        let time = self.t.to_f64();
+        reactions(&self.model, &mut self.ws, time)?;
+        check_reactions(&self.model, &self.ws, time)?;
         Ok(&self.ws)
     }
 }
@@ -308,6 +333,26 @@ fn check_outputs<T: Real>(model: &Model<T>, ws: &Workspace<T>, time: f64) -> Res
     let e = energy(model, ws);
     if !(e.kinetic.finite() && e.potential.finite()) {
         return fail("the kinetic or potential energy (the state overflows it)");
+    }
+    Ok(())
+}
+
+/// Every joint reaction and driving torque of the kinetostatics is finite, or the error
+/// that says not (at time `time`, s).
+fn check_reactions<T: Real>(
+    model: &Model<T>,
+    ws: &Workspace<T>,
+    time: f64,
+) -> Result<(), StepError> {
+    for (g, r) in model.groups().iter().zip(ws.reactions.iter()) {
+        for x in r.iter().take(g.joints.len()) {
+            if !(x.force.x.finite() && x.force.y.finite() && x.moment.finite()) {
+                return Err(StepError::NonFinite {
+                    time,
+                    what: "a joint reaction or driving torque (the forces overflow the scalar)",
+                });
+            }
+        }
     }
     Ok(())
 }

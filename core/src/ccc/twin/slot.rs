@@ -626,6 +626,7 @@ fn retime(e: StepError, time: f64) -> StepError {
         StepError::Group { group, fault, .. } => StepError::Group { time, group, fault },
         StepError::SingularMassMatrix { .. } => StepError::SingularMassMatrix { time },
         StepError::NonFinite { what, .. } => StepError::NonFinite { time, what },
+        e @ StepError::EnergyBalance { .. } => e,
     }
 }
 

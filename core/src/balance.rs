@@ -1,0 +1,324 @@
+//! The energy balance of every fixed step (SPEC 3's audit, for any mechanism): the work
+//! done on the mechanism by its motors and its constant loads must equal the change of
+//! its kinetic plus potential energy (gravity is in the potential),
+//!
+//! `W_motors + W_loads = Δ(K + V)`.
+//!
+//! - The motors' work is `∫ Σ_d τ_d(t, q, q̇) q̇_d dt`, integrated with the state: the
+//!   power at each DP5 stage, combined with the 5th-order weights (the quadrature DP5
+//!   would make of an extra state component `w' = P`, without changing a bit of `q`,
+//!   `q̇`). The first stage's power is the last stage's of the step before (FSAL).
+//! - A constant load (force `F` at a link point `P`, moment `M` on the link) does the
+//!   work `F·Δr_P + M·Δθ` over a step, exactly.
+//!
+//! A step whose residual (work in minus energy gained) exceeds [`tolerance`] times the
+//! energy scale `1 J + |W_motors| + |W_loads| + |K| + |V|` is redone in [`SUBSTEPS`]
+//! DP5 steps (4, then 16; the caller's step stays `h`, its time still `(n+1)·h`); if the
+//! finest division breaks it too, the step fails with [`StepError::EnergyBalance`]. The
+//! converter's twin checks its steps by the same rule
+//! ([`TwinSettings::energy_tol`](crate::ccc::TwinSettings::energy_tol)).
+//!
+//! The caller-set moments of [`Workspace::applied_moment`] are not metered: a
+//! [`Simulation`](crate::Simulation) has no way to set them (the twin, which does, keeps
+//! its own audit).
+
+use crate::config::{MAX_LOADS, STATE_DIM};
+use crate::dynamics::energy;
+use crate::error::StepError;
+use crate::integrator::{Dp5, OdeSystem, Tableau};
+use crate::model::Model;
+use crate::scalar::{rotate_cs, Real, Vec2};
+use crate::simulation::Equations;
+use crate::workspace::Workspace;
+use nalgebra::SVector;
+
+/// Sub-steps tried in turn for one fixed step whose energy balance breaks: at most
+/// 1 + 4 + 16 DP5 steps' work.
+pub const SUBSTEPS: [u32; 3] = [1, 4, 16];
+
+/// Relative tolerance of one step's residual, of the energy scale (see the module docs).
+pub const ENERGY_TOL: f64 = 1e-9;
+
+/// The tolerance in ulps of the scalar, when that is larger (`f32`: its energies are
+/// rounded to ~1e-7 of their size).
+pub const ENERGY_ULPS: f64 = 1e3;
+
+/// The relative tolerance of one step's residual in `T`: [`ENERGY_TOL`], or
+/// [`ENERGY_ULPS`] ulps if that is larger (`f32`: 1.2e-4).
+pub fn tolerance<T: Real>() -> T {
+    T::c(ENERGY_TOL).max(T::EPS * T::c(ENERGY_ULPS))
+}
+
+/// The energy balance of a simulation since its start, J, and what its audit did.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Balance<T> {
+    /// Work of the motors on the mechanism, J (N·m·rad or N·m).
+    pub motor_work: T,
+    /// Work of the model's constant loads on the mechanism, J.
+    pub load_work: T,
+    /// Kinetic energy now, J.
+    pub kinetic: T,
+    /// Potential energy now (gravity), J.
+    pub potential: T,
+    /// Kinetic plus potential energy at the start, J.
+    pub initial: T,
+    /// The largest residual of one step relative to its energy scale (dimensionless;
+    /// the steps pass while it is at most [`tolerance`]).
+    pub worst: T,
+    /// Steps redone in sub-steps.
+    pub redone: u64,
+    /// DP5 sub-steps of the redone steps, in all.
+    pub substeps: u64,
+    /// Intervals of [`Simulation::step_adaptive`](crate::Simulation::step_adaptive),
+    /// whose motor work is not metered: while it is not 0, `motor_work` covers the fixed
+    /// steps only and the residual holds the other intervals' motor work too.
+    pub unaudited: u64,
+    /// The motors' power at the current state, W (the next step's first stage).
+    power: T,
+}
+
+impl<T: Real> Balance<T> {
+    /// The balance at the start: the workspace evaluated at the initial state.
+    pub(crate) fn start(model: &Model<T>, ws: &Workspace<T>) -> Self {
+        let e = energy(model, ws);
+        Balance {
+            motor_work: T::zero(),
+            load_work: T::zero(),
+            kinetic: e.kinetic,
+            potential: e.potential,
+            initial: e.kinetic + e.potential,
+            worst: T::zero(),
+            redone: 0,
+            substeps: 0,
+            unaudited: 0,
+            power: motor_power(model, ws),
+        }
+    }
+
+    /// Work in minus energy gained since the start,
+    /// `motor_work + load_work - (kinetic + potential - initial)`, J.
+    pub fn residual(&self) -> T {
+        self.motor_work + self.load_work - (self.kinetic + self.potential - self.initial)
+    }
+
+    /// The energy scale of a step's tolerance,
+    /// `1 J + |motor_work| + |load_work| + |kinetic| + |potential|`, J.
+    pub fn scale(&self) -> T {
+        T::one()
+            + self.motor_work.abs()
+            + self.load_work.abs()
+            + self.kinetic.abs()
+            + self.potential.abs()
+    }
+
+    /// After an unaudited interval that ended at the workspace's state: the loads' work
+    /// (exact, from `before`), the energies and the power at the new state.
+    pub(crate) fn skip(
+        &mut self,
+        model: &Model<T>,
+        ws: &Workspace<T>,
+        before: &LoadPoses<T>,
+        h: T,
+    ) {
+        let e = energy(model, ws);
+        self.load_work += before.work_to(model, ws, h);
+        self.kinetic = e.kinetic;
+        self.potential = e.potential;
+        self.power = motor_power(model, ws);
+        self.unaudited = self.unaudited.saturating_add(1);
+    }
+}
+
+/// `Σ_d τ_d q̇_d`, W: the motors' power at the workspace's last evaluation.
+fn motor_power<T: Real>(model: &Model<T>, ws: &Workspace<T>) -> T {
+    let mut p = T::zero();
+    for (d, tau) in model.drives().iter().zip(ws.motor.iter()) {
+        p += *tau * ws.qd.get(d.coord as usize).copied().unwrap_or(T::zero());
+    }
+    p
+}
+
+/// Where each constant load acts at one state: its point (world, m), its link's angle
+/// (rad) and angular speed (rad/s).
+#[derive(Clone, Copy)]
+pub(crate) struct LoadPoses<T: Real>([(Vec2<T>, T, T); MAX_LOADS]);
+
+impl<T: Real> LoadPoses<T> {
+    /// The loads' poses at the workspace's state.
+    pub(crate) fn at(model: &Model<T>, ws: &Workspace<T>) -> Self {
+        let mut p = [(Vec2::zeros(), T::zero(), T::zero()); MAX_LOADS];
+        for (slot, ld) in p.iter_mut().zip(model.loads()) {
+            let b = ws.body.get(ld.body as usize).copied().unwrap_or_default();
+            *slot = (b.o + rotate_cs(b.c, b.s, &ld.point), b.theta, b.omega);
+        }
+        LoadPoses(p)
+    }
+
+    /// The loads' work from these poses to the workspace's state, `h` (s) later:
+    /// `Σ F·Δr_P + M·Δθ`, J. A link angle may be recorded modulo 2π (a dyad's closed
+    /// form): `Δθ` is the difference taken to the turn nearest `h (ω0 + ω1)/2`.
+    pub(crate) fn work_to(&self, model: &Model<T>, ws: &Workspace<T>, h: T) -> T {
+        let end = LoadPoses::at(model, ws);
+        let (half, turn) = (T::c(0.5), T::two_pi());
+        let mut w = T::zero();
+        for ((ld, (r0, th0, om0)), (r1, th1, om1)) in
+            model.loads().iter().zip(self.0.iter()).zip(end.0.iter())
+        {
+            w += ld.force.dot(&(*r1 - *r0));
+            if ld.moment != T::zero() {
+                let raw = *th1 - *th0;
+                let rotation = h * half * (*om0 + *om1);
+                w += ld.moment * (raw - turn * ((raw - rotation) / turn).round());
+            }
+        }
+        w
+    }
+}
+
+/// The equations of motion, metering the motors' power at every evaluation.
+struct Metered<'s, 'a, T: Real> {
+    /// The equations.
+    eq: &'s mut Equations<'a, T>,
+    /// The power (W) at each evaluation of the DP5 step under way, in order: a step
+    /// evaluates 7 stages, or 6 when it reuses the last one of the step before (FSAL);
+    /// the last six are stages 2 to 7.
+    power: [T; Tableau::STAGES],
+    /// Evaluations of the step under way.
+    evals: usize,
+}
+
+impl<T: Real> OdeSystem<T, STATE_DIM> for Metered<'_, '_, T> {
+    type Error = StepError;
+    fn eval(
+        &mut self,
+        t: T,
+        y: &SVector<T, STATE_DIM>,
+        dy: &mut SVector<T, STATE_DIM>,
+    ) -> Result<(), StepError> {
+        self.eq.eval(t, y, dy)?;
+        if let Some(p) = self.power.get_mut(self.evals) {
+            *p = motor_power(self.eq.model, self.eq.ws);
+        }
+        self.evals += 1;
+        Ok(())
+    }
+}
+
+impl<T: Real> Metered<'_, '_, T> {
+    /// The motors' work over the DP5 step of size `h` just taken, whose first stage's
+    /// power is `first` (W): `h Σ B5_i P_i`, J; and the power at its last stage (its end
+    /// state).
+    fn work(&self, h: T, first: T) -> (T, T) {
+        let stages = self.power.get(..self.evals).unwrap_or(&[]);
+        let later = stages.get(stages.len().saturating_sub(6)..).unwrap_or(&[]);
+        let mut sum = T::c(Tableau::B5[0]) * first;
+        for (b, p) in Tableau::B5.iter().skip(1).zip(later) {
+            sum += T::c(*b) * *p;
+        }
+        (h * sum, later.last().copied().unwrap_or(first))
+    }
+}
+
+/// One fixed step of `h` from `(t, y)` in `substeps` DP5 steps of `h / substeps` (the
+/// last landing on `t + h` bitwise), with its energy balance checked against `start`,
+/// the balance at `(t, y)`. Returns the balance at the end, or an error (the caller
+/// restores the last good state): an evaluation's, [`StepError::EnergyBalance`], or a
+/// non-finite work. Energies that are not finite are left to the caller's check of the
+/// outputs, which names them.
+pub(crate) fn audited_step<T: Real>(
+    sys: &mut Equations<'_, T>,
+    dp5: &mut Dp5<T, STATE_DIM>,
+    t: &mut T,
+    y: &mut SVector<T, STATE_DIM>,
+    h: T,
+    substeps: u32,
+    start: &Balance<T>,
+) -> Result<Balance<T>, StepError> {
+    let (t0, t_end) = (*t, *t + h);
+    let n = substeps.max(1);
+    let mut meter = Metered {
+        eq: sys,
+        power: [T::zero(); Tableau::STAGES],
+        evals: 0,
+    };
+    let (mut motor, mut load, mut power) = (T::zero(), T::zero(), start.power);
+    for k in 1..=n {
+        // `t0 + h·k/n` (k/n exact: n is a power of 2); the step `t_k - t` is exact
+        // (Sterbenz), so each sub-step lands on its `t_k` and the last on `t + h`.
+        let t_k = if k == n {
+            t_end
+        } else {
+            t0 + h * T::c(f64::from(k) / f64::from(n))
+        };
+        let h_k = t_k - *t;
+        let poses = LoadPoses::at(meter.eq.model, meter.eq.ws);
+        meter.evals = 0;
+        dp5.step(&mut meter, t, y, h_k)?;
+        let (w, p) = meter.work(h_k, power);
+        motor += w;
+        power = p;
+        // The last evaluation is at the sub-step's end state.
+        load += poses.work_to(meter.eq.model, meter.eq.ws, h_k);
+    }
+    let (model, ws) = (meter.eq.model, &*meter.eq.ws);
+    let e = energy(model, ws);
+    let mut end = Balance {
+        motor_work: start.motor_work + motor,
+        load_work: start.load_work + load,
+        kinetic: e.kinetic,
+        potential: e.potential,
+        power,
+        ..*start
+    };
+    if !(e.kinetic.finite() && e.potential.finite()) {
+        return Ok(end);
+    }
+    if !(end.motor_work.finite() && end.load_work.finite() && power.finite()) {
+        return Err(StepError::NonFinite {
+            time: t_end.to_f64(),
+            what: "the work of the motors or loads (their power overflows)",
+        });
+    }
+    // Work in minus energy gained over the step.
+    let residual = motor + load - ((e.kinetic - start.kinetic) + (e.potential - start.potential));
+    let scale = end.scale();
+    if !(residual.abs() <= tolerance::<T>() * scale) {
+        return Err(StepError::EnergyBalance {
+            time: t0.to_f64(),
+            residual: residual.to_f64(),
+            scale: scale.to_f64(),
+            substeps: n,
+        });
+    }
+    end.worst = end.worst.max(residual.abs() / scale);
+    if n > 1 {
+        end.redone = end.redone.saturating_add(1);
+        end.substeps = end.substeps.saturating_add(u64::from(n));
+    }
+    Ok(end)
+}
+
+/// Takes one fixed step by `attempt(n)` (a step in `n` sub-steps, see [`audited_step`]):
+/// undivided first; if that breaks the energy balance, in each finer division of
+/// [`SUBSTEPS`] in turn until one passes. A division may fail otherwise (a group's
+/// fault, a non-finite value: a coarse step's stages can land far off); the next one
+/// is tried all the same. When none passes, the error is the energy balance's, with the
+/// residual of the finest division that reached the step's end. An undivided step that
+/// fails otherwise fails with its own error.
+pub(crate) fn redo_in_substeps<T: Real>(
+    mut attempt: impl FnMut(u32) -> Result<Balance<T>, StepError>,
+) -> Result<Balance<T>, StepError> {
+    let [first, finer @ ..] = SUBSTEPS;
+    let mut broken = match attempt(first) {
+        Err(e @ StepError::EnergyBalance { .. }) => e,
+        other => return other,
+    };
+    for n in finer {
+        match attempt(n) {
+            Ok(b) => return Ok(b),
+            Err(e @ StepError::EnergyBalance { .. }) => broken = e,
+            Err(_) => {}
+        }
+    }
+    Err(broken)
+}
