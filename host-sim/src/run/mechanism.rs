@@ -39,6 +39,23 @@ pub struct MaxReaction {
     pub time: f64,
 }
 
+/// A run's energy balance as the core metered it (`structomat::Balance`), J.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Metered {
+    /// Work of the motors, integrated with the state.
+    pub motor_work: f64,
+    /// Work of the constant loads.
+    pub load_work: f64,
+    /// Work in minus the change of K + V.
+    pub residual: f64,
+    /// The worst step's balance relative to its energy scale.
+    pub worst: f64,
+    /// Steps redone in sub-steps.
+    pub redone: u64,
+    /// Sub-steps taken by them.
+    pub substeps: u64,
+}
+
 /// What a run did (printed as a few lines by its `Display`).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Summary {
@@ -70,6 +87,10 @@ pub struct Summary {
     /// the power `Σ motor_torque · q̇`. Without other non-conservative loads,
     /// `end - start - work` measures the integration error (plus the rule's `O(h²)`).
     pub drive_work: f64,
+    /// The energy balance the core metered with the state, when every step was a
+    /// fixed DP5 step (`None` with the adaptive integrator, whose intervals are not
+    /// metered).
+    pub balance: Option<Metered>,
     /// Largest reaction force magnitude over every step (revolute `|F|`, prismatic `|N|`).
     pub max_reaction: Option<MaxReaction>,
     /// With `integrator = "adaptive"`: its steps accepted and rejected in all (`steps`
@@ -155,12 +176,21 @@ impl fmt::Display for Summary {
         let (k1, v1) = self.energy_end;
         let (e0, e1) = (k0 + v0, k1 + v1);
         writeln!(f, "energy    K + V: start {k0:.6} + {v0:.6} = {e0:.6} J, end {k1:.6} + {v1:.6} = {e1:.6} J")?;
-        writeln!(
-            f,
-            "balance   work of the drives {:.6} J (trapezoid), end - start - work = {:.3e} J",
-            self.drive_work,
-            e1 - e0 - self.drive_work
-        )?;
+        match &self.balance {
+            Some(b) => writeln!(
+                f,
+                "balance   work of the motors {:.6} J + loads {:.6} J, end - start - work = {:.3e} J; \
+                 worst step {:.1e} of its energy scale, {} steps redone in {} sub-steps",
+                b.motor_work, b.load_work, -b.residual, b.worst, b.redone, b.substeps
+            )?,
+            None => writeln!(
+                f,
+                "balance   work of the drives {:.6} J (trapezoid; adaptive intervals are not metered), \
+                 end - start - work = {:.3e} J",
+                self.drive_work,
+                e1 - e0 - self.drive_work
+            )?,
+        }
         if let Some(r) = &self.max_reaction {
             writeln!(
                 f,
@@ -340,6 +370,17 @@ pub fn simulate<T: Real>(
         energy_start,
         energy_end: (e1.kinetic.to_f64(), e1.potential.to_f64()),
         drive_work,
+        balance: (sim.balance().unaudited == 0).then(|| {
+            let b = sim.balance();
+            Metered {
+                motor_work: b.motor_work.to_f64(),
+                load_work: b.load_work.to_f64(),
+                residual: b.residual().to_f64(),
+                worst: b.worst.to_f64(),
+                redone: b.redone,
+                substeps: b.substeps,
+            }
+        }),
         max_reaction: max.map(|(k, value, time)| MaxReaction {
             joint: layout.names[k].clone(),
             value,

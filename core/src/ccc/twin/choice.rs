@@ -557,7 +557,9 @@ impl<T: Real> Twin<T> {
         let q = match cand.reposition(params, m, coords, load.pose, time) {
             Ok(q) => q,
             Err(e) => {
-                crate::trace::debug!("candidate {m} in {coords} coordinates does not assemble: {e:?}");
+                crate::trace::debug!(
+                    "candidate {m} in {coords} coordinates does not assemble: {e:?}"
+                );
                 return None;
             }
         };
