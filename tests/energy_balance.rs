@@ -15,6 +15,7 @@ use structomat::motor::Motor;
 use structomat::scalar::Vec2;
 use structomat::structomat::{DyadRrr, MotorR, PointRef};
 use structomat::{Model, Simulation, StepError};
+use structomat_suite::Rng;
 
 /// Kinetic plus potential energy of the simulation's current state, J.
 fn total_energy(sim: &Simulation<f64>) -> f64 {
@@ -230,22 +231,6 @@ fn a_huge_step_fails_with_the_energy_balance_error() {
     assert_eq!(snapshot(&sim), before);
     // Stepping on with a sane step is still possible from the kept state.
     assert!(sim.kinetostatics().is_ok());
-}
-
-/// splitmix64 (as in tests/robustness.rs): deterministic test data.
-struct Rng(u64);
-
-impl Rng {
-    fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-    fn range(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * ((self.next_u64() >> 11) as f64 / (1u64 << 53) as f64)
-    }
 }
 
 /// Random crank-rockers (Grashof, crank shortest), random masses, constant motors of

@@ -3,8 +3,9 @@
 //! # structomat
 //!
 //! Real-time dynamics of planar linkages by *structomats* (Assur groups), transmission
-//! matrices, Lagrange's equations and Dormand-Prince, after the thesis in
-//! `shared/seed/` as fixed by `shared/SPEC.md`.
+//! matrices, Lagrange's equations and Dormand-Prince, after a thesis on the
+//! Constantinesco torque converter; the physics and the conventions are in the
+//! repository's `docs/model.md`.
 //!
 //! A mechanism is a [`Model`]: links, ground points and an ordered
 //! motion-transmission sequence of groups ([`structomat`]), validated once by a
@@ -20,6 +21,12 @@
 //! | DP5 fixed, thesis-adaptive, adaptive | [`integrator`] | SPEC 1; thesis 5.4 |
 //! | each fixed step's energy balance, sub-steps | [`balance`] | SPEC 3's audit |
 //! | motor laws | [`motor`] | thesis 5.3 |
+//! | the stepper of a model | [`simulation`] | SPEC 1 |
+//! | fixed-size LU, Cholesky, small inverses | [`linalg`] | |
+//! | the thesis's slider-crank and five-bar | [`mechanisms`] | thesis ch. 6 |
+//! | the Constantinesco converter and its twin | [`ccc`], [`ccc::Twin`] | SPEC 3; thesis ch. 2, 5.5, 7 |
+//!
+//! SPEC n names a section of `docs/model.md`.
 //!
 //! No heap, no panics on the step path, bounded iterations, `libm` math everywhere
 //! (bit-identical results on every platform), generic over `f64` and `f32`.
