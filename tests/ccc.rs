@@ -5,7 +5,7 @@
 
 use structomat::ccc::{
     initial_pose, mode_model, CccParams, Clutch, Coordinates, DriveDirection, Event, EventKind,
-    Inputs, LinkState, Mode, MotorInput, Twin, TwinError, TwinSettings,
+    Inputs, LinkState, Mode, MotorInput, Twin, TwinSettings, TwinSetupError, TwinStepError,
 };
 use structomat::kinematics::{assemble, position};
 use structomat::motor::Motor;
@@ -28,7 +28,7 @@ fn s2_inputs() -> Inputs<f64> {
 struct Run {
     events: Vec<Event<f64>>,
     switches: usize,
-    end: Option<TwinError>,
+    end: Option<TwinStepError>,
     t_end: f64,
     max_rel_residual: f64,
     worst_gap: f64,
@@ -679,12 +679,12 @@ fn s1_ends_at_the_mechanism_singularity() {
     };
     assert!(end.at_singularity(), "{end}");
     let time = match end {
-        TwinError::Mechanism { time, failures, .. } => {
+        TwinStepError::Mechanism { time, failures, .. } => {
             assert!(!failures.is_empty());
             *time
         }
-        TwinError::Diverged { time, .. } => *time,
-        TwinError::Diode { time, sines, .. } => {
+        TwinStepError::Diverged { time, .. } => *time,
+        TwinStepError::Diode { time, sines, .. } => {
             // Both equal branches come in line at once.
             assert!(sines.iter().all(|s| *s < 1e-2), "{sines:?}");
             *time
@@ -736,10 +736,13 @@ fn s2_ccw_runs() {
     assert_eq!(r.final_kinetic, 0.0);
 }
 
-/// A failed step keeps the last good state: a non-finite load is refused before
-/// anything moves, and the twin steps on afterwards as if nothing happened.
+/// A bad per-step input is refused before anything moves: [`TwinStepError::BadInput`]
+/// names the input, its value and the time, the twin is bit for bit as before (its
+/// whole `Debug` dump, every float in shortest round-trip form, against the dump taken
+/// before), and it steps on as a twin that never saw the bad input (the oracle: a clone
+/// stepped with the good inputs only).
 #[test]
-fn bad_inputs_leave_the_state() {
+fn bad_inputs_are_named_and_leave_the_state() {
     let inputs = s2_inputs();
     let mut a = Twin::new(
         CccParams::reference(),
@@ -747,27 +750,123 @@ fn bad_inputs_leave_the_state() {
         inputs,
     )
     .unwrap();
-    let mut b = a.clone();
     for _ in 0..10 {
         a.step(&inputs).unwrap();
+    }
+    let mut b = a.clone();
+    let (nan, inf) = (f64::NAN, f64::INFINITY);
+    let load = |load| Inputs { load, ..inputs };
+    let motor = |motor| Inputs { motor, ..inputs };
+    let measured = |m| Inputs {
+        measured: Some(m),
+        ..inputs
+    };
+    let cases = [
+        (load(nan), "load", nan),
+        (load(-1.0), "load", -1.0),
+        (load(inf), "load", inf),
+        (motor(MotorInput::Torque(nan)), "motor torque", nan),
+        (motor(MotorInput::Torque(-inf)), "motor torque", -inf),
+        (
+            motor(MotorInput::Law(Motor::Constant(inf))),
+            "motor law's constant torque",
+            inf,
+        ),
+        (measured((nan, 0.0)), "measured crank angle", nan),
+        (measured((0.0, -inf)), "measured crank speed", -inf),
+    ];
+    let before = format!("{b:?}");
+    for (bad, want_field, want_value) in cases {
+        let e = b.step(&bad).unwrap_err();
+        let TwinStepError::BadInput { time, field, value } = e else {
+            panic!("{want_field}: expected BadInput, got {e}");
+        };
+        assert_eq!(field, want_field);
+        assert!(
+            value.to_bits() == want_value.to_bits() || (value.is_nan() && want_value.is_nan()),
+            "{field}: {value} vs {want_value}"
+        );
+        assert_eq!(time, a.time());
+        let msg = e.to_string();
+        assert!(
+            msg.contains(want_field) && msg.contains("t = 0.001000 s"),
+            "{msg}"
+        );
+        assert!(format!("{b:?}") == before, "{field}: the state moved");
+    }
+    for _ in 0..3 {
+        a.step(&inputs).unwrap();
         b.step(&inputs).unwrap();
+    }
+    assert!(format!("{a:?}") == format!("{b:?}"), "the twins part");
+}
+
+/// A bad setting is refused by name and value ([`TwinSetupError::Setting`]), each field
+/// of [`TwinSettings`] alone out of its range; a pose the converter cannot assemble at
+/// is [`TwinSetupError::Assembly`] with the angles; a bad first input is the first
+/// step's [`TwinStepError::BadInput`].
+#[test]
+fn bad_settings_are_named() {
+    let inputs = s2_inputs();
+    let good = TwinSettings::<f64>::reference(1e-4);
+    type Set = fn(&mut TwinSettings<f64>, f64);
+    let fields: [(&str, Set, &[f64]); 7] = [
+        ("h", |s, v| s.h = v, &[0.0, -1e-4, f64::NAN, f64::INFINITY]),
+        (
+            "switch_below",
+            |s, v| s.switch_below = v,
+            &[0.0, 1.0, f64::NAN],
+        ),
+        (
+            "energy_tol",
+            |s, v| s.energy_tol = v,
+            &[0.0, -1.0, f64::INFINITY],
+        ),
+        ("crank", |s, v| s.crank = v, &[f64::NAN, f64::INFINITY]),
+        ("swing", |s, v| s.swing = v, &[f64::NAN]),
+        (
+            "crank_speed",
+            |s, v| s.crank_speed = v,
+            &[f64::NEG_INFINITY],
+        ),
+        ("swing_speed", |s, v| s.swing_speed = v, &[f64::NAN]),
+    ];
+    for (want, set, values) in fields {
+        for v in values {
+            let mut s = good;
+            set(&mut s, *v);
+            let e = Twin::new(CccParams::reference(), s, inputs).unwrap_err();
+            let TwinSetupError::Setting { field, value } = e else {
+                panic!("{want} = {v}: expected Setting, got {e}");
+            };
+            assert_eq!(field, want);
+            assert!(value.to_bits() == v.to_bits() || (value.is_nan() && v.is_nan()));
+            assert!(e.to_string().contains(want), "{e}");
+        }
+    }
+    // SPEC 3's pivots are 0.37 m apart: a swing link pointing away from the crank's
+    // side leaves the coupler short (no assembly at q2 = -90°).
+    let mut s = good;
+    s.swing = -90f64.to_radians();
+    match Twin::new(CccParams::reference(), s, inputs) {
+        Err(TwinSetupError::Assembly { crank, swing }) => {
+            assert_eq!((crank, swing), (good.crank, s.swing));
+        }
+        Err(e) => panic!("expected Assembly, got {e}"),
+        Ok(_) => panic!("assembled at q2 = -90°"),
     }
     let bad = Inputs {
         load: f64::NAN,
         ..inputs
     };
-    assert!(matches!(b.step(&bad), Err(TwinError::Setting(_))));
-    let neg = Inputs {
-        load: -1.0,
-        ..inputs
-    };
-    assert!(b.step(&neg).is_err());
-    assert_eq!(a.time(), b.time());
-    a.step(&inputs).unwrap();
-    b.step(&inputs).unwrap();
-    assert_eq!(a.q(), b.q());
-    assert_eq!(a.qd(), b.qd());
-    assert_eq!(a.mode(), b.mode());
+    let e = Twin::new(CccParams::reference(), good, bad).unwrap_err();
+    assert!(
+        matches!(
+            e,
+            TwinSetupError::Start(TwinStepError::BadInput { field: "load", .. })
+        ),
+        "{e}"
+    );
 }
 
 /// With no load (T_r = 0) an engaged lever carries exactly 0 N·m: rounding must not fire

@@ -4,13 +4,13 @@
 //! events at h and h/2, SPEC 3's consistency flag on every event, and, where the run
 //! must end, the geometry of the diode at the last good state.
 
-use structomat::ccc::{CccParams, Event, Inputs, MotorInput, Twin, TwinError, TwinSettings};
+use structomat::ccc::{CccParams, Event, Inputs, MotorInput, Twin, TwinSettings, TwinStepError};
 use structomat::motor::Motor;
 
 /// What a run logged.
 struct Run {
     events: Vec<Event<f64>>,
-    end: Option<TwinError>,
+    end: Option<TwinStepError>,
     t_end: f64,
     max_rel_residual: f64,
     /// At the last good state: |DH| minus the stretched length rod + lever (≤ 0), m.

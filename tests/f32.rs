@@ -8,7 +8,7 @@
 //! The bounds below are about 5 times the largest difference measured over those steps.
 
 use structomat::ccc::{CccParams, DriveDirection, EventKind, Inputs, Mode, MotorInput, Twin};
-use structomat::ccc::{TwinError, TwinSettings};
+use structomat::ccc::{TwinSettings, TwinStepError};
 use structomat::mechanisms::five_bar;
 use structomat::motor::Motor;
 use structomat::scalar::Real;
@@ -17,7 +17,7 @@ use structomat::scalar::Real;
 struct Run {
     /// `(kind, mode after, time)` of every event, the start included.
     events: Vec<(EventKind, Mode, f64)>,
-    end: Option<TwinError>,
+    end: Option<TwinStepError>,
     t_end: f64,
     /// Crank angle θ1 at t = 0.5 s (if the run got there), rad.
     crank_half: Option<f64>,
@@ -220,7 +220,7 @@ fn five_bar_f32_follows_f64_for_half_a_second() {
 /// line within the horizon at their rate, |DH| within 0.5 mm of rod + lever.
 #[test]
 fn s1_f32_ends_at_the_diode_singularity_like_f64() {
-    fn end<T: Real>() -> TwinError {
+    fn end<T: Real>() -> TwinStepError {
         let mut settings = TwinSettings::reference(T::c(1e-4));
         settings.clutch = false;
         let inputs = Inputs {
@@ -237,8 +237,8 @@ fn s1_f32_ends_at_the_diode_singularity_like_f64() {
         panic!("S1 ran past 0.5 s");
     }
     let (e64, e32) = (end::<f64>(), end::<f32>());
-    let diode = |e: &TwinError| match *e {
-        TwinError::Diode {
+    let diode = |e: &TwinStepError| match *e {
+        TwinStepError::Diode {
             time,
             reach,
             sines,

@@ -13,7 +13,7 @@
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 use std::sync::atomic::{AtomicUsize, Ordering};
-use structomat::ccc::{CccParams, Inputs, MotorInput, Twin, TwinError, TwinSettings};
+use structomat::ccc::{CccParams, Inputs, MotorInput, Twin, TwinSettings, TwinStepError};
 use structomat::mechanisms::{five_bar, slider_crank, Scenario};
 use structomat::motor::Motor;
 use structomat::{Real, StepError};
@@ -77,7 +77,7 @@ const TWIN_STEPS: usize = 2000;
 
 /// Allocations during [`TWIN_STEPS`] steps of the reference converter on S2, the
 /// steps done, and the first error.
-fn measure_twin<T: Real>() -> (usize, usize, Option<TwinError>) {
+fn measure_twin<T: Real>() -> (usize, usize, Option<TwinStepError>) {
     let inputs = Inputs {
         motor: MotorInput::Law(Motor::Constant(T::c(12.0))),
         load: T::c(800.0),

@@ -33,7 +33,8 @@ use std::sync::Once;
 use std::time::Instant;
 
 use structomat::ccc::{
-    Bar, CccParams, DriveDirection, Inputs, MotorInput, Side, Twin, TwinError, TwinSettings,
+    Bar, CccParams, DriveDirection, Inputs, MotorInput, Side, Twin, TwinSettings, TwinSetupError,
+    TwinStepError,
 };
 use structomat::config::{MAX_DOF, MAX_DRIVES, MAX_GROUND_POINTS, MAX_GROUPS, MAX_LINKS};
 use structomat::model::{Link, Load, ModelBuilder};
@@ -347,23 +348,35 @@ fn check_setup_error(e: &SetupError) -> Result<(), String> {
     }
 }
 
-fn twin_error_time(e: &TwinError) -> Option<f64> {
+fn twin_error_time(e: &TwinStepError) -> Option<f64> {
     match e {
-        TwinError::Model(_) | TwinError::Setting(_) => None,
-        TwinError::Step(s) => Some(s.time()),
-        TwinError::Mechanism { time, .. }
-        | TwinError::Diverged { time, .. }
-        | TwinError::Diode { time, .. }
-        | TwinError::Coasting { time } => Some(*time),
+        TwinStepError::TimeOverflow { .. } => None,
+        TwinStepError::Step(s) => Some(s.time()),
+        TwinStepError::BadInput { time, .. }
+        | TwinStepError::Model { time, .. }
+        | TwinStepError::Mechanism { time, .. }
+        | TwinStepError::Diverged { time, .. }
+        | TwinStepError::Diode { time, .. }
+        | TwinStepError::Coasting { time } => Some(*time),
     }
 }
 
-fn check_twin_error(e: &TwinError) -> Result<(), String> {
+fn check_twin_setup_error(e: &TwinSetupError) -> Result<(), String> {
+    match e {
+        TwinSetupError::Start(s) => {
+            check_twin_error(s)?;
+            check_named(e, twin_error_time(s))
+        }
+        e => check_named(e, None),
+    }
+}
+
+fn check_twin_error(e: &TwinStepError) -> Result<(), String> {
     check_named(e, twin_error_time(e))?;
-    if let TwinError::Step(s) = e {
+    if let TwinStepError::Step(s) = e {
         check_step_error(s)?;
     }
-    if let TwinError::Diverged { jump, .. } = e {
+    if let TwinStepError::Diverged { jump, .. } = e {
         // The jump is what broke the balance: NaN would say nothing.
         if jump.is_nan() {
             return Err(format!("diverged with a NaN jump: {e}"));
@@ -1357,7 +1370,7 @@ fn run_twin<T: Real>(
             }
             Err(e) => {
                 tally.steps_err += 1;
-                tally.error(kind_of("TwinError", &e));
+                tally.error(kind_of("TwinStepError", &e));
                 check_twin_error(&e).map_err(|m| format!("step {k}: {m}"))?;
                 if let Some(t) = twin_error_time(&e) {
                     let h = tw.h().to_f64();
@@ -1516,25 +1529,27 @@ fn case_twin_geometry<T: Real>(seed: u64, tally: &mut Tally) -> Result<(), Strin
     let inputs = random_inputs::<T>(&mut g, 0, schedule, (1.8, 0.0));
     // What must be refused, in the order the door checks it.
     let refuse = if params_invalid(&p) {
-        Some("Model")
-    } else if settings_invalid(&settings) || inputs_invalid(&inputs) {
+        Some("Params")
+    } else if settings_invalid(&settings) {
         Some("Setting")
+    } else if inputs_invalid(&inputs) {
+        Some("Start")
     } else {
         None
     };
     match Twin::new(p, settings, inputs) {
         Err(e) => {
-            tally.error(kind_of("TwinError", &e));
-            let kind = kind_of("TwinError", &e);
+            tally.error(kind_of("TwinSetupError", &e));
+            let kind = kind_of("TwinSetupError", &e);
             // Parameters finite and in range can still overflow the scalar (a length
             // of 1e200 m squared): a parameter error too, checked before the settings.
-            let overflow = matches!(e, TwinError::Model(ModelError::Overflow(_)));
+            let overflow = matches!(e, TwinSetupError::Params(ModelError::Overflow(_)));
             if let Some(want) = refuse.filter(|_| !overflow) {
-                if kind != format!("TwinError::{want}") {
+                if kind != format!("TwinSetupError::{want}") {
                     return Err(format!("expected a {want} error, got {e}"));
                 }
             }
-            check_twin_error(&e)
+            check_twin_setup_error(&e)
         }
         Ok(mut tw) => {
             if let Some(want) = refuse {
@@ -1576,8 +1591,8 @@ fn case_twin_inputs<T: Real>(seed: u64, tally: &mut Tally) -> Result<(), String>
     };
     let mut tw = match Twin::new(p, s, start) {
         Err(e) => {
-            tally.error(kind_of("TwinError", &e));
-            return check_twin_error(&e);
+            tally.error(kind_of("TwinSetupError", &e));
+            return check_twin_setup_error(&e);
         }
         Ok(t) => t,
     };
@@ -1927,7 +1942,7 @@ fn regression_overflowing_accelerations_are_not_called_singular() {
     };
     let e = tw.step(&huge).unwrap_err();
     assert!(
-        matches!(e, TwinError::Step(StepError::NonFinite { what, .. }) if what.contains("accelerations")),
+        matches!(e, TwinStepError::Step(StepError::NonFinite { what, .. }) if what.contains("accelerations")),
         "{e}"
     );
     twin_snapshot(&tw).same_as(&before).unwrap();

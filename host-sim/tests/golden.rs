@@ -60,7 +60,7 @@ struct Pin<'a> {
 /// `cargo test --release -p host-sim --test golden` (x86_64 Linux, rustc 1.95).
 /// `ccc-s1` ends at the mechanism's singularity (its expected end, exit status 0), and
 /// so does `ccc-s1 --f32`, 1.1 ms earlier: rounding breaks its energy balance while the
-/// diode's branches are 1.2 ms from in line (`TwinError::Diode`'s horizon). Both S1 logs hold only their
+/// diode's branches are 1.2 ms from in line (`TwinStepError::Diode`'s horizon). Both S1 logs hold only their
 /// header (free mode has no start event and S1 no coordinate switch), hence the same
 /// log hashes.
 const PINS: &[Pin<'static>] = &[

@@ -14,6 +14,6 @@ mod twin;
 
 pub use twin::{
     Audit, CoordinateSwitch, Event, EventKind, Failure, Inputs, LinkState, MotorInput, Twin,
-    TwinError, TwinSettings, DIODE_HORIZON_STEPS, JOINTS, JOINT_NAMES, MAX_EVENTS_PER_STEP,
-    MAX_LOCATE_ITER, MAX_RETRIES, SINGULAR_CONDITIONING, SUBSTEPS,
+    TwinSettings, TwinSetupError, TwinStepError, DIODE_HORIZON_STEPS, JOINTS, JOINT_NAMES,
+    MAX_EVENTS_PER_STEP, MAX_LOCATE_ITER, MAX_RETRIES, SINGULAR_CONDITIONING, SUBSTEPS,
 };

@@ -5,7 +5,7 @@
 //! one place where host-sim sets up and steps the core's twin and reads its errors.
 //!
 //! Exit codes: 0 when the run reaches `t_end`, and for `ccc-s1` also when it ends at a
-//! singularity of the mechanism ([`TwinError::at_singularity`]): that is S1's expected end
+//! singularity of the mechanism ([`TwinStepError::at_singularity`]): that is S1's expected end
 //! (SPEC 3), reported in the summary. Any other failed step is exit code 1, after the
 //! rows and log lines before it are written and the summary is printed.
 
@@ -19,7 +19,7 @@ use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 use structomat::ccc::{
     initial_pose, mode_model, Audit, Coordinates, DriveDirection, EventKind, Inputs, Mode,
-    MotorInput, Twin, TwinError, TwinSettings, JOINT_NAMES,
+    MotorInput, Twin, TwinSettings, TwinStepError, JOINT_NAMES,
 };
 use structomat::Real;
 
@@ -106,7 +106,7 @@ pub enum End {
     /// Step `steps + 1` failed; the twin keeps the state after `steps` steps.
     Stopped {
         /// The twin's error.
-        error: TwinError,
+        error: TwinStepError,
         /// Whether it is the scenario's expected end (S1 at the mechanism's
         /// singularity): exit code 0, else 1.
         expected: bool,

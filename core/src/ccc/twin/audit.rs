@@ -1,6 +1,6 @@
 //! The energy audit (SPEC 3).
 
-use super::error::{Failure, TwinError};
+use super::error::{Failure, TwinStepError};
 use super::slot::{physical_energy, LinkState, W_LOAD, W_MOTOR};
 use super::{shaft_speed, Twin, Work};
 use crate::error::{GroupFault, StepError};
@@ -38,7 +38,7 @@ impl<T: Real> Audit<T> {
 /// integrated with the motion but not checked by its evaluations, and an energy can
 /// overflow at finite speeds (`½ J_s ω²` with a huge J_s): past the scalar's range the
 /// balance test would compare infinities and pass.
-pub(super) fn audit_finite<T: Real>(a: &Audit<T>, t: T) -> Result<(), TwinError> {
+pub(super) fn audit_finite<T: Real>(a: &Audit<T>, t: T) -> Result<(), TwinStepError> {
     let terms = [
         a.motor_work,
         a.load_work,
@@ -51,7 +51,7 @@ pub(super) fn audit_finite<T: Real>(a: &Audit<T>, t: T) -> Result<(), TwinError>
     if terms.iter().all(|x| x.finite()) {
         Ok(())
     } else {
-        Err(TwinError::Step(StepError::NonFinite {
+        Err(TwinStepError::Step(StepError::NonFinite {
             time: t.to_f64(),
             what: "the energy audit (a work or an energy overflows the scalar)",
         }))
@@ -80,7 +80,7 @@ impl<T: Real> Twin<T> {
     pub(super) fn check_energy(
         &self,
         w: &Work<T>,
-    ) -> Result<(Audit<T>, [LinkState<T>; 9]), TwinError> {
+    ) -> Result<(Audit<T>, [LinkState<T>; 9]), TwinStepError> {
         let links = self.slots.cur().links(&self.params);
         let a = self.audit_of(&links, w);
         audit_finite(&a, w.t)?;
@@ -90,7 +90,7 @@ impl<T: Real> Twin<T> {
             return Ok((a, links));
         }
         let (group, conditioning) = self.slots.cur().worst_group();
-        Err(TwinError::Diverged {
+        Err(TwinStepError::Diverged {
             time: self.t.to_f64(),
             mode: self.slots.cur().mode,
             jump: jump.to_f64(),

@@ -5,7 +5,7 @@ use super::super::build::{driving_link, dyads_conditioning, BRANCHES};
 use super::super::mode::{Clutch, Coordinates, Mode};
 use super::consistency::torques_clear;
 use super::coordinates::best_slot;
-use super::error::TwinError;
+use super::error::TwinStepError;
 use super::evaluate::{Stage, Torques};
 use super::guards::{Event, EventKind};
 use super::impact::{constraint_rows, project, rows_mismatch};
@@ -47,7 +47,7 @@ impl<T: Real> Twin<T> {
         w: &mut Work<T>,
         kind: EventKind,
         inputs: &Inputs<T>,
-    ) -> Result<(), TwinError> {
+    ) -> Result<(), TwinStepError> {
         let time = w.t.to_f64();
         let from = self.slots.cur().mode;
         let pose = self.slot_links_unwrapped();
@@ -201,7 +201,7 @@ impl<T: Real> Twin<T> {
             Some(x) => x,
             None => {
                 let Some((v, m)) = best else {
-                    return Err(TwinError::Mechanism {
+                    return Err(TwinStepError::Mechanism {
                         time,
                         mode: from,
                         failures: heapless::Vec::new(),
@@ -218,7 +218,7 @@ impl<T: Real> Twin<T> {
             }
         };
         if m.shaft_turning() && with_shaft && m.clutches().iter().all(|c| *c == Clutch::Free) {
-            return Err(TwinError::Coasting { time });
+            return Err(TwinStepError::Coasting { time });
         }
         // The candidate slot holds the chosen mode, evaluated: take it. If that was the
         // reference model, it becomes the scratch slot first (a swap, ~4k
@@ -307,7 +307,7 @@ impl<T: Real> Twin<T> {
         inputs: &Inputs<T>,
         tol_w: T,
         screened: Option<[T; 2]>,
-    ) -> Result<Candidate<T>, TwinError> {
+    ) -> Result<Candidate<T>, TwinStepError> {
         // Physical angular speeds after the impact, from the reference model's V.
         let mut omega = [T::zero(); 9];
         for (p, o) in omega.iter_mut().enumerate().skip(1) {

@@ -2,7 +2,7 @@
 
 use super::super::mode::{Coordinates, Mode};
 use super::super::params::CccParams;
-use super::error::{Failure, TwinError};
+use super::error::{Failure, TwinStepError};
 use super::slot::{physical, Inputs, Slot};
 use super::{joint_gap, load_state, Twin, Work};
 use crate::error::StepError;
@@ -39,7 +39,7 @@ pub(super) fn best_slot<T: Real>(
     switch_below: T,
     slot: &mut Slot<T>,
     spare: &mut Slot<T>,
-) -> Result<[T; 2], TwinError> {
+) -> Result<[T; 2], TwinStepError> {
     // (conditioning, coordinates) of the best so far, which `slot` holds.
     let mut best: Option<(T, [T; 2])> = None;
     let failures = scan_choices(params, mode, pose, time, None, slot, spare, |s, q| {
@@ -54,7 +54,7 @@ pub(super) fn best_slot<T: Real>(
             Take::No
         }
     })?;
-    best.map(|(_, q)| q).ok_or(TwinError::Mechanism {
+    best.map(|(_, q)| q).ok_or(TwinStepError::Mechanism {
         time,
         mode,
         failures,
@@ -78,7 +78,7 @@ pub(super) enum Take {
 /// is built twice and no slot is copied or swapped (30 KB in f64) unless the choice
 /// kept last ends up in `spare`: then the two are swapped once at the end. Returns the
 /// groups that failed in the others; an error that is not a group's (a non-finite
-/// input) ends the scan. `slot` holds the last choice kept, if any.
+/// input, a model that cannot be built) ends the scan. `slot` holds the last choice kept, if any.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn scan_choices<T: Real>(
     params: &CccParams<T>,
@@ -89,7 +89,7 @@ pub(super) fn scan_choices<T: Real>(
     slot: &mut Slot<T>,
     spare: &mut Slot<T>,
     mut take: impl FnMut(&Slot<T>, [T; 2]) -> Take,
-) -> Result<heapless::Vec<Failure, 3>, TwinError> {
+) -> Result<heapless::Vec<Failure, 3>, TwinStepError> {
     let mut failures: heapless::Vec<Failure, 3> = heapless::Vec::new();
     // Whether `slot` holds the choice kept last; the next is built in the other.
     let (mut kept_in_slot, mut kept_any) = (false, false);
@@ -113,14 +113,14 @@ pub(super) fn scan_choices<T: Real>(
                     break;
                 }
             }
-            Err(StepError::Group { group, fault, .. }) => {
+            Err(TwinStepError::Step(StepError::Group { group, fault, .. })) => {
                 let _ = failures.push(Failure {
                     coords,
                     group,
                     fault,
                 });
             }
-            Err(e) => return Err(TwinError::Step(e)),
+            Err(e) => return Err(e),
         }
     }
     if !kept_in_slot && kept_any {
@@ -138,7 +138,7 @@ impl<T: Real> Twin<T> {
         w: &mut Work<T>,
         inputs: &Inputs<T>,
         failed: Option<StepError>,
-    ) -> Result<(), TwinError> {
+    ) -> Result<(), TwinStepError> {
         let time = w.t.to_f64();
         let mode = self.slots.cur().mode;
         let pose = self.slot_links_unwrapped();
@@ -189,7 +189,7 @@ impl<T: Real> Twin<T> {
                     },
                 );
             }
-            return Err(TwinError::Mechanism {
+            return Err(TwinStepError::Mechanism {
                 time,
                 mode,
                 failures,

@@ -1,4 +1,4 @@
-//! Why the twin could not be set up or step.
+//! Why the twin could not be set up ([`TwinSetupError`]) or step ([`TwinStepError`]).
 
 use super::super::build::{BRANCHES, ROCKER};
 use super::super::mode::{Coordinates, Mode};
@@ -20,13 +20,61 @@ pub struct Failure {
     pub fault: GroupFault,
 }
 
-/// Why the twin could not be set up or step. A failed step leaves the last good state.
+/// Why a twin could not be set up ([`Twin::new`]): nothing was built.
 #[derive(Clone, Debug, PartialEq)]
-pub enum TwinError {
-    /// A parameter is invalid.
-    Model(ModelError),
-    /// A setting or an input is invalid.
-    Setting(&'static str),
+pub enum TwinSetupError {
+    /// A parameter of the converter is invalid.
+    Params(ModelError),
+    /// A field of [`TwinSettings`] is invalid.
+    Setting {
+        /// The field, as [`TwinSettings`] names it.
+        field: &'static str,
+        /// Its value.
+        value: f64,
+    },
+    /// The converter cannot assemble at the initial crank and swing-link angles.
+    Assembly {
+        /// [`TwinSettings::crank`], rad.
+        crank: f64,
+        /// [`TwinSettings::swing`], rad.
+        swing: f64,
+    },
+    /// The initial state (the first mode's coordinates and speeds) is not finite.
+    InitialState,
+    /// The first evaluation, the first mode choice or the first inputs failed: the
+    /// error a step would give there.
+    Start(TwinStepError),
+}
+
+/// Why a step of the twin failed ([`Twin::step`]). The twin keeps its last good state.
+#[derive(Clone, Debug, PartialEq)]
+pub enum TwinStepError {
+    /// A per-step input is invalid: the twin did not step.
+    BadInput {
+        /// Time of the last good state, s.
+        time: f64,
+        /// The input ([`Inputs`](super::Inputs)' field and what of it).
+        field: &'static str,
+        /// Its value.
+        value: f64,
+    },
+    /// The time `(n + 1)·h` of the next step overflows the scalar type.
+    TimeOverflow {
+        /// Steps taken, n.
+        steps: u64,
+        /// The fixed step, s.
+        h: f64,
+    },
+    /// A mode's model could not be built at the pose (its geometry degenerates there,
+    /// or a value overflows): the model builder's own error.
+    Model {
+        /// Time, s.
+        time: f64,
+        /// The mode being built.
+        mode: Mode,
+        /// The model builder's error.
+        error: ModelError,
+    },
     /// An evaluation failed (not a group: a non-finite input, a singular mass matrix).
     Step(StepError),
     /// Every coordinate choice of the mode fails here: a singularity of the mechanism
@@ -58,8 +106,8 @@ pub enum TwinError {
     /// folded) and the step could not go on: a singularity of the mechanism itself
     /// (SPEC 3, the end of S1). The branch's dyad loses rank; with the reference's equal
     /// branches both come in line at once, G and I meet, and the two branches'
-    /// constraints become one. Replaces the [`TwinError::Mechanism`] or singular
-    /// [`TwinError::Diverged`] error it explains.
+    /// constraints become one. Replaces the [`TwinStepError::Mechanism`] or singular
+    /// [`TwinStepError::Diverged`] error it explains.
     Diode {
         /// Time of the last good state, s (the failing step starts there).
         time: f64,
@@ -87,13 +135,98 @@ pub enum TwinError {
     },
 }
 
-impl fmt::Display for TwinError {
+/// A value as an error message gives it: in words when it is not finite.
+struct Value(f64);
+
+impl fmt::Display for Value {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self.0 {
+            v if v.is_nan() => f.write_str("not a number"),
+            v if v.is_infinite() && v > 0.0 => f.write_str("+infinity"),
+            v if v.is_infinite() => f.write_str("-infinity"),
+            v => write!(f, "{v:e}"),
+        }
+    }
+}
+
+/// What a [`TwinSettings`] field is and what it must be.
+fn setting_rule(field: &str) -> (&'static str, &'static str) {
+    match field {
+        "h" => ("the step, s", "must be positive and finite"),
+        "energy_tol" => ("the energy tolerance", "must be positive and finite"),
+        "switch_below" => ("the coordinate switch threshold", "must be in (0, 1)"),
+        "crank" => ("the initial crank angle, rad", "must be finite"),
+        "swing" => ("the initial swing-link angle, rad", "must be finite"),
+        "crank_speed" => ("the initial crank speed, rad/s", "must be finite"),
+        "swing_speed" => ("the initial swing-link speed, rad/s", "must be finite"),
+        _ => ("a setting", "must be finite"),
+    }
+}
+
+impl fmt::Display for TwinSetupError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            TwinError::Model(e) => write!(f, "converter: {e}"),
-            TwinError::Setting(s) => write!(f, "converter: {s}"),
-            TwinError::Step(e) => write!(f, "{e}"),
-            TwinError::Mechanism {
+            TwinSetupError::Params(e) => write!(f, "converter: {e}"),
+            TwinSetupError::Setting { field, value } => {
+                let (what, rule) = setting_rule(field);
+                write!(
+                    f,
+                    "converter: the setting {field} ({what}) = {} {rule}",
+                    Value(*value)
+                )
+            }
+            TwinSetupError::Assembly { crank, swing } => write!(
+                f,
+                "converter: it cannot assemble at the initial crank angle {crank} rad and swing-link angle {swing} rad"
+            ),
+            TwinSetupError::InitialState => {
+                f.write_str("converter: the initial state (coordinates and speeds) is not finite")
+            }
+            TwinSetupError::Start(e) => write!(f, "converter: the first evaluation failed: {e}"),
+        }
+    }
+}
+
+impl core::error::Error for TwinSetupError {}
+
+impl From<ModelError> for TwinSetupError {
+    fn from(e: ModelError) -> Self {
+        TwinSetupError::Params(e)
+    }
+}
+
+impl From<TwinStepError> for TwinSetupError {
+    fn from(e: TwinStepError) -> Self {
+        TwinSetupError::Start(e)
+    }
+}
+
+impl fmt::Display for TwinStepError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            TwinStepError::BadInput { time, field, value } => {
+                let rule = if *field == "load" {
+                    "must be finite and ≥ 0"
+                } else {
+                    "must be finite"
+                };
+                write!(
+                    f,
+                    "t = {time:.6} s: the input {field} = {} {rule}: no step taken",
+                    Value(*value)
+                )
+            }
+            TwinStepError::TimeOverflow { steps, h } => write!(
+                f,
+                "the time of step {} at h = {h:e} s overflows the scalar type",
+                steps.saturating_add(1)
+            ),
+            TwinStepError::Model { time, mode, error } => write!(
+                f,
+                "t = {time:.6} s: mode {mode}: its model cannot be built at this pose: {error}"
+            ),
+            TwinStepError::Step(e) => write!(f, "{e}"),
+            TwinStepError::Mechanism {
                 time,
                 mode,
                 failures,
@@ -108,7 +241,7 @@ impl fmt::Display for TwinError {
                 }
                 Ok(())
             }
-            TwinError::Diverged {
+            TwinStepError::Diverged {
                 time,
                 mode,
                 jump,
@@ -126,7 +259,7 @@ impl fmt::Display for TwinError {
                 worst.group,
                 worst.fault
             ),
-            TwinError::Diode {
+            TwinStepError::Diode {
                 time,
                 mode,
                 reach,
@@ -168,7 +301,7 @@ impl fmt::Display for TwinError {
                     stretched_reach[0]
                 )
             }
-            TwinError::Coasting { time } => write!(
+            TwinStepError::Coasting { time } => write!(
                 f,
                 "t = {time:.6} s: the shaft would coast free of both levers (J_s > 0), which is not modelled"
             ),
@@ -176,35 +309,38 @@ impl fmt::Display for TwinError {
     }
 }
 
-impl core::error::Error for TwinError {}
+impl core::error::Error for TwinStepError {}
 
-impl TwinError {
+impl TwinStepError {
     /// Whether the twin stopped at a singularity of the mechanism itself (SPEC 3: the
-    /// end of S1), rather than at a bad input, a setting or a step too coarse.
+    /// end of S1), rather than at a bad input or a step too coarse.
     pub fn at_singularity(&self) -> bool {
         match self {
-            TwinError::Mechanism { .. } | TwinError::Diode { .. } => true,
-            TwinError::Diverged { worst, .. } => matches!(
+            TwinStepError::Mechanism { .. } | TwinStepError::Diode { .. } => true,
+            TwinStepError::Diverged { worst, .. } => matches!(
                 worst.fault,
                 GroupFault::Singular { conditioning } if conditioning < SINGULAR_CONDITIONING
             ),
             _ => false,
         }
     }
-}
 
-impl From<ModelError> for TwinError {
-    fn from(e: ModelError) -> Self {
-        TwinError::Model(e)
+    /// Whether finer sub-steps may pass the step: a group that fails, or an energy
+    /// balance that breaks, may be a step too coarse for a fast passage.
+    pub(super) fn retry_finer(&self) -> bool {
+        matches!(
+            self,
+            TwinStepError::Mechanism { .. } | TwinStepError::Diverged { .. }
+        )
     }
 }
 
 impl<T: Real> Twin<T> {
-    /// [`TwinError::Diode`] if a diode branch's rod and lever are in line at the last
+    /// [`TwinStepError::Diode`] if a diode branch's rod and lever are in line at the last
     /// good state: |sin| of their angle under [`SINGULAR_CONDITIONING`], or closing
     /// towards 0 fast enough to get there within [`DIODE_HORIZON_STEPS`] steps
     /// (d|sin Δ|/dt = sign(sin Δ)·cos Δ·(ω_rod − ω_lever), Δ = θ_rod − θ_lever).
-    pub(super) fn diode_in_line(&self) -> Option<TwinError> {
+    pub(super) fn diode_in_line(&self) -> Option<TwinStepError> {
         let reach = (self.joint_position(ROCKER, 2) - self.params.h).norm();
         let horizon = DIODE_HORIZON_STEPS * self.h().to_f64();
         let mut sines = [1.0; 2];
@@ -236,7 +372,7 @@ impl<T: Real> Twin<T> {
         if !in_line.iter().any(|b| *b) {
             return None;
         }
-        Some(TwinError::Diode {
+        Some(TwinStepError::Diode {
             time: self.t.to_f64(),
             mode: self.slots.cur().mode,
             reach: reach.to_f64(),
@@ -247,12 +383,12 @@ impl<T: Real> Twin<T> {
         })
     }
 
-    pub(super) fn physical_error(&self, e: StepError) -> TwinError {
+    pub(super) fn physical_error(&self, e: StepError) -> TwinStepError {
         match e {
             StepError::Group { .. } => {
                 let StepError::Group { time, group, fault } = physical(&self.slots.cur().map, e)
                 else {
-                    return TwinError::Step(e);
+                    return TwinStepError::Step(e);
                 };
                 let mut failures = heapless::Vec::new();
                 let _ = failures.push(Failure {
@@ -260,13 +396,13 @@ impl<T: Real> Twin<T> {
                     group,
                     fault,
                 });
-                TwinError::Mechanism {
+                TwinStepError::Mechanism {
                     time,
                     mode: self.slots.cur().mode,
                     failures,
                 }
             }
-            e => TwinError::Step(e),
+            e => TwinStepError::Step(e),
         }
     }
 }

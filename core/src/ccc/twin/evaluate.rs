@@ -5,7 +5,7 @@
 //! functions), each a function; [`Twin::evaluate_from`] runs them from a given stage on,
 //! for a workspace that already holds the stages before it.
 
-use super::error::TwinError;
+use super::error::TwinStepError;
 use super::guards::Guards;
 use super::slot::{Inputs, LinkState};
 use super::{Twin, Work};
@@ -68,7 +68,7 @@ impl<T: Real> Twin<T> {
         w: &Work<T>,
         inputs: &Inputs<T>,
         torques: Torques<'_, T>,
-    ) -> Result<TorqueSource, TwinError> {
+    ) -> Result<TorqueSource, TwinStepError> {
         if stage <= Stage::Motion {
             self.stage_motion(w, inputs)?;
         }
@@ -94,7 +94,7 @@ impl<T: Real> Twin<T> {
     }
 
     /// [`Stage::Motion`]: the slot's equations of motion at `w`'s state.
-    fn stage_motion(&mut self, w: &Work<T>, inputs: &Inputs<T>) -> Result<(), TwinError> {
+    fn stage_motion(&mut self, w: &Work<T>, inputs: &Inputs<T>) -> Result<(), TwinStepError> {
         self.slots
             .cur_mut()
             .eval(w.t, &w.y, inputs, self.drive)
@@ -102,7 +102,7 @@ impl<T: Real> Twin<T> {
     }
 
     /// [`Stage::Reactions`]: the slot's kinetostatics.
-    fn stage_reactions(&mut self, w: &Work<T>) -> Result<(), TwinError> {
+    fn stage_reactions(&mut self, w: &Work<T>) -> Result<(), TwinStepError> {
         let slot = self.slots.cur_mut();
         reactions(&slot.model, &mut slot.ws, w.t.to_f64()).map_err(|e| self.physical_error(e))
     }
@@ -131,7 +131,11 @@ impl<T: Real> Twin<T> {
     /// next DP5 step from there takes its first stage from this evaluation (after a
     /// mode change or a coordinate switch the rest of the step then takes 6
     /// evaluations, not 7).
-    pub(super) fn restart_at(&mut self, w: &Work<T>, inputs: &Inputs<T>) -> Result<(), TwinError> {
+    pub(super) fn restart_at(
+        &mut self,
+        w: &Work<T>,
+        inputs: &Inputs<T>,
+    ) -> Result<(), TwinStepError> {
         self.evaluate_from(Stage::Motion, w, inputs, Torques::Kinetostatics)?;
         self.seed_first_stage(w, inputs);
         Ok(())
@@ -150,7 +154,7 @@ impl<T: Real> Twin<T> {
         &mut self,
         w: &Work<T>,
         inputs: &Inputs<T>,
-    ) -> Result<(), TwinError> {
+    ) -> Result<(), TwinStepError> {
         if self.torque_source == TorqueSource::Kept {
             self.evaluate_from(Stage::Accelerations, w, inputs, Torques::Kinetostatics)?;
         }

@@ -1,7 +1,7 @@
 //! Event location inside a DP5 step: Illinois regula falsi on the dense output, started
 //! from the root of an interpolant of the event function.
 
-use super::error::TwinError;
+use super::error::TwinStepError;
 use super::evaluate::{Stage, Torques};
 use super::guards::{EventKind, Fired, Guard, Guards};
 use super::settings::*;
@@ -173,7 +173,7 @@ impl<T: Real> Twin<T> {
         (g0, r0): (&Guards<T>, &Guards<T>),
         fired: Fired,
         inputs: &Inputs<T>,
-    ) -> Result<(T, EventKind, bool), TwinError> {
+    ) -> Result<(T, EventKind, bool), TwinStepError> {
         // The largest of the fired functions (the first of equals) and its value.
         let pick = |g: &Guards<T>| -> (T, Guard) {
             let mut best = (T::c(f64::NEG_INFINITY), Guard::Catch6);

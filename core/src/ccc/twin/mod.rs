@@ -28,7 +28,7 @@ mod slots;
 
 pub use audit::Audit;
 pub use coordinates::CoordinateSwitch;
-pub use error::{Failure, TwinError};
+pub use error::{Failure, TwinSetupError, TwinStepError};
 pub use guards::{Event, EventKind};
 pub use settings::{
     TwinSettings, DIODE_HORIZON_STEPS, MAX_EVENTS_PER_STEP, MAX_LOCATE_ITER, MAX_RETRIES,
@@ -41,7 +41,9 @@ use super::mode::{Clutch, Coordinates, Mode};
 use super::params::CccParams;
 use crate::error::StepError;
 use crate::integrator::Dp5;
+use crate::motor::Motor;
 use crate::scalar::{Real, Vec2};
+use crate::workspace::WarmStart;
 use audit::audit_finite;
 use coordinates::best_slot;
 use evaluate::{Stage, TorqueSource, Torques};
@@ -151,44 +153,16 @@ impl<T: Real> Twin<T> {
         params: CccParams<T>,
         settings: TwinSettings<T>,
         inputs: Inputs<T>,
-    ) -> Result<Self, TwinError> {
+    ) -> Result<Self, TwinSetupError> {
         params.validate()?;
-        if !(settings.h.finite() && settings.h > T::zero()) {
-            return Err(TwinError::Setting("step h must be positive and finite"));
-        }
-        if !(settings.switch_below.finite()
-            && settings.switch_below > T::zero()
-            && settings.switch_below < T::one())
-        {
-            return Err(TwinError::Setting("switch_below must be in (0, 1)"));
-        }
-        if !(settings.energy_tol.finite() && settings.energy_tol > T::zero()) {
-            return Err(TwinError::Setting("energy_tol must be positive and finite"));
-        }
-        for (x, what) in [
-            (settings.crank, "the initial crank angle must be finite"),
-            (
-                settings.swing,
-                "the initial swing-link angle must be finite",
-            ),
-            (
-                settings.crank_speed,
-                "the initial crank speed must be finite",
-            ),
-            (
-                settings.swing_speed,
-                "the initial swing-link speed must be finite",
-            ),
-        ] {
-            if !x.finite() {
-                return Err(TwinError::Setting(what));
-            }
-        }
-        check_inputs(&inputs)?;
-        let pose =
-            initial_pose(&params, settings.crank, settings.swing).ok_or(TwinError::Setting(
-                "the converter cannot assemble at the initial crank and swing angles",
-            ))?;
+        check_settings(&settings)?;
+        check_inputs(&inputs, T::zero())?;
+        let pose = initial_pose(&params, settings.crank, settings.swing).ok_or(
+            TwinSetupError::Assembly {
+                crank: settings.crank.to_f64(),
+                swing: settings.swing.to_f64(),
+            },
+        )?;
         let mode = if settings.clutch {
             Mode::I0
         } else {
@@ -212,7 +186,7 @@ impl<T: Real> Twin<T> {
         omega[4] = settings.swing_speed;
         load_state(&slot, &q, &omega, &mut y);
         if y.iter().any(|v| !v.finite()) {
-            return Err(TwinError::Setting("initial state is not finite"));
+            return Err(TwinSetupError::InitialState);
         }
         let mut twin = Twin {
             drive: params.drive.sign(),
@@ -269,8 +243,8 @@ impl<T: Real> Twin<T> {
     /// One step of `h` under `inputs` (held over the step). On error the twin keeps the
     /// state of the last good step, including what it reports of that step (events,
     /// coordinate switches, the candidates of the last mode choice).
-    pub fn step(&mut self, inputs: &Inputs<T>) -> Result<(), TwinError> {
-        check_inputs(inputs)?;
+    pub fn step(&mut self, inputs: &Inputs<T>) -> Result<(), TwinStepError> {
+        check_inputs(inputs, self.t)?;
         let changed = !same_inputs(&self.inputs, inputs);
         let saved = self.slots.cur().ws.warm_start();
         // The last good step's log: an attempt rewrites it. Usually empty (events and
@@ -280,51 +254,65 @@ impl<T: Real> Twin<T> {
             self.switches.clone(),
             self.candidates.clone(),
         );
-        let mut failure = TwinError::Setting("no sub-step division was tried");
-        for (attempt, substeps) in SUBSTEPS.iter().enumerate() {
-            self.events.clear();
-            self.switches.clear();
-            if changed || attempt > 0 {
-                self.dp5.invalidate();
+        let [first, finer @ ..] = SUBSTEPS;
+        let mut result = self.attempt(inputs, changed, changed, first, &saved);
+        for substeps in finer {
+            match &result {
+                Err(e) if e.retry_finer() => {}
+                _ => break,
             }
-            let mut w = self.work_from_state();
-            let result = self
-                .advance(&mut w, inputs, changed, *substeps)
-                .and_then(|()| self.check_energy(&w));
-            match result {
-                Ok((audit, links)) => {
-                    self.y = w.y;
-                    self.steps += 1;
-                    self.commit(&w, audit, links);
-                    self.inputs = *inputs;
-                    return Ok(());
-                }
-                Err(e) => {
-                    self.restore(w.switched, &saved);
-                    // A group that fails, or an energy balance that breaks, may be a
-                    // step too coarse for a fast passage: finer sub-steps may pass it.
-                    let retry =
-                        matches!(e, TwinError::Mechanism { .. } | TwinError::Diverged { .. });
-                    failure = e;
-                    if !retry {
-                        break;
-                    }
-                }
-            }
+            result = self.attempt(inputs, changed, true, substeps, &saved);
         }
+        let Err(failure) = result else {
+            return Ok(());
+        };
         (self.events, self.switches, self.candidates) = log;
         // A step that fails near the diode's limit is the mechanism's singularity, also
         // when rounding (f32) breaks the energy balance some steps before the groups'
         // conditioning falls under SINGULAR_CONDITIONING.
-        if matches!(
-            failure,
-            TwinError::Mechanism { .. } | TwinError::Diverged { .. }
-        ) {
+        if failure.retry_finer() {
             if let Some(e) = self.diode_in_line() {
                 return Err(e);
             }
         }
         Err(failure)
+    }
+
+    /// One attempt at the step in at most `substeps` DP5 steps between events,
+    /// committed if it succeeds; on an error the twin is back at its last good state
+    /// (the current slot's warm starts `saved`). `changed`: the inputs differ from the
+    /// last step's; `fresh`: the integrator's last stage is not the first of this
+    /// attempt (the inputs changed, or an attempt failed).
+    fn attempt(
+        &mut self,
+        inputs: &Inputs<T>,
+        changed: bool,
+        fresh: bool,
+        substeps: u32,
+        saved: &WarmStart<T>,
+    ) -> Result<(), TwinStepError> {
+        self.events.clear();
+        self.switches.clear();
+        if fresh {
+            self.dp5.invalidate();
+        }
+        let mut w = self.work_from_state();
+        let result = self
+            .advance(&mut w, inputs, changed, substeps)
+            .and_then(|()| self.check_energy(&w));
+        match result {
+            Ok((audit, links)) => {
+                self.y = w.y;
+                self.steps += 1;
+                self.commit(&w, audit, links);
+                self.inputs = *inputs;
+                Ok(())
+            }
+            Err(e) => {
+                self.restore(w.switched, saved);
+                Err(e)
+            }
+        }
     }
 
     /// A step's working state, starting from the twin's last good state.
@@ -346,12 +334,13 @@ impl<T: Real> Twin<T> {
         inputs: &Inputs<T>,
         changed: bool,
         substeps: u32,
-    ) -> Result<(), TwinError> {
+    ) -> Result<(), TwinStepError> {
         let t_end = T::c((self.steps + 1) as f64) * self.settings.h;
         if !t_end.finite() {
-            return Err(TwinError::Setting(
-                "the time n·h of the next step overflows the scalar type",
-            ));
+            return Err(TwinStepError::TimeOverflow {
+                steps: self.steps,
+                h: self.settings.h.to_f64(),
+            });
         }
         let h_max = self.settings.h / T::c(substeps as f64);
         if changed {
@@ -692,30 +681,78 @@ fn same_inputs<T: Real>(a: &Inputs<T>, b: &Inputs<T>) -> bool {
     motor && same_bits(a.load, b.load)
 }
 
-fn check_inputs<T: Real>(inputs: &Inputs<T>) -> Result<(), TwinError> {
+/// A motor law's first parameter that is not finite, named, if any (a user
+/// function's value is checked where it is evaluated).
+fn law_fault<T: Real>(m: &Motor<T>) -> Option<(&'static str, T)> {
+    match *m {
+        Motor::Constant(c) => Some(("motor law's constant torque", c)),
+        Motor::Asynchronous(a) => [
+            ("motor law's coefficient a", a.a),
+            ("motor law's coefficient b", a.b),
+            ("motor law's coefficient c", a.c),
+        ]
+        .into_iter()
+        .find(|(_, v)| !v.finite()),
+        Motor::User(_) => None,
+    }
+    .filter(|(_, v)| !v.finite())
+}
+
+/// The settings are in range, or the error that names the first that is not.
+fn check_settings<T: Real>(s: &TwinSettings<T>) -> Result<(), TwinSetupError> {
+    let positive = |x: T| x.finite() && x > T::zero();
+    let checks = [
+        ("h", s.h, positive(s.h)),
+        (
+            "switch_below",
+            s.switch_below,
+            positive(s.switch_below) && s.switch_below < T::one(),
+        ),
+        ("energy_tol", s.energy_tol, positive(s.energy_tol)),
+        ("crank", s.crank, s.crank.finite()),
+        ("swing", s.swing, s.swing.finite()),
+        ("crank_speed", s.crank_speed, s.crank_speed.finite()),
+        ("swing_speed", s.swing_speed, s.swing_speed.finite()),
+    ];
+    match checks.iter().find(|(_, _, ok)| !ok) {
+        Some((field, value, _)) => Err(TwinSetupError::Setting {
+            field,
+            value: value.to_f64(),
+        }),
+        None => Ok(()),
+    }
+}
+
+/// The per-step inputs are valid, or the error that names the first that is not
+/// (`time`: the twin's, s).
+fn check_inputs<T: Real>(inputs: &Inputs<T>, time: T) -> Result<(), TwinStepError> {
+    let bad = |field, value: T| {
+        Err(TwinStepError::BadInput {
+            time: time.to_f64(),
+            field,
+            value: value.to_f64(),
+        })
+    };
     if !(inputs.load.finite() && inputs.load >= T::zero()) {
-        return Err(TwinError::Setting(
-            "the load torque T_r must be finite and ≥ 0",
-        ));
+        return bad("load", inputs.load);
     }
     match inputs.motor {
-        slot::MotorInput::Torque(v) if !v.finite() => {
-            return Err(TwinError::Setting("the motor torque must be finite"));
-        }
+        MotorInput::Torque(v) if !v.finite() => return bad("motor torque", v),
         // A law's parameters are checked here; what a user function returns is checked
         // at every evaluation (a non-finite torque fails the step, state kept).
-        slot::MotorInput::Law(m) if m.validate().is_err() => {
-            return Err(TwinError::Setting(
-                "the motor law's parameters must be finite",
-            ));
+        MotorInput::Law(m) => {
+            if let Some((field, value)) = law_fault(&m) {
+                return bad(field, value);
+            }
         }
         _ => {}
     }
     if let Some((a, w)) = inputs.measured {
-        if !(a.finite() && w.finite()) {
-            return Err(TwinError::Setting(
-                "the measured crank angle and speed must be finite",
-            ));
+        if !a.finite() {
+            return bad("measured crank angle", a);
+        }
+        if !w.finite() {
+            return bad("measured crank speed", w);
         }
     }
     Ok(())

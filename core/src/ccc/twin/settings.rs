@@ -16,12 +16,12 @@ pub const MAX_RETRIES: usize = 2;
 /// [`TwinSettings::energy_tol`]): at most 1 + 4 + 16 DP5 steps' work.
 pub const SUBSTEPS: [u32; 3] = [1, 4, 16];
 
-/// Below this conditioning of its worst group, a [`TwinError::Diverged`](super::TwinError::Diverged) step is taken
+/// Below this conditioning of its worst group, a [`TwinStepError::Diverged`](super::TwinStepError::Diverged) step is taken
 /// to run into a singularity of the mechanism rather than to be too coarse.
 pub const SINGULAR_CONDITIONING: f64 = 1e-2;
 
 /// A diode branch whose rod and lever come in line within this many steps at their
-/// present rate counts as in line when a step fails ([`TwinError::Diode`](super::TwinError::Diode)). In f64 the
+/// present rate counts as in line when a step fails ([`TwinStepError::Diode`](super::TwinStepError::Diode)). In f64 the
 /// branch's |sin| is under [`SINGULAR_CONDITIONING`] by then; in f32 rounding breaks
 /// the energy balance 8 to 16 steps before (S1 at h = 1e-4 s: 0.3227 s against f64's
 /// 0.3238 s), at |sin| of 3e-2 to 6e-2.
@@ -49,7 +49,7 @@ pub struct TwinSettings<T> {
     /// Largest change of the audit residual over one step, relative to 1 J plus the
     /// motor work and the kinetic and potential energies. A step past it is redone in
     /// [`SUBSTEPS`]; if even the finest fails, the step fails with
-    /// [`TwinError::Diverged`](super::TwinError::Diverged) and the twin keeps its last good state. S2's steps stay
+    /// [`TwinStepError::Diverged`](super::TwinStepError::Diverged) and the twin keeps its last good state. S2's steps stay
     /// under 4e-11; S1's last steps before the diode stretches grow past 1e-9 each.
     /// Reference: 1e-9, or 1000 ulps of the scalar if that is larger (f32).
     pub energy_tol: T,

@@ -5,6 +5,7 @@
 use super::super::build::{build_into, physical_link, BodyMap, BRANCHES, CRANK};
 use super::super::mode::{Clutch, Coordinates, Mode};
 use super::super::params::CccParams;
+use super::error::TwinStepError;
 use crate::dynamics::solve_accelerations;
 use crate::error::{GroupId, StepError};
 use crate::integrator::OdeSystem;
@@ -116,7 +117,8 @@ impl<T: Real> Slot<T> {
     /// Builds, in this slot, the model of `mode` driven by `coords` at the physical
     /// angles `pose` (index 1..=8) and assembles it there; returns its coordinates. In
     /// place, so that no slot (30 KB in f64) is ever a temporary on the stack. On an
-    /// error the slot holds a half-built mode and must be rebuilt before use.
+    /// error (the model builder's, or a group's that fails to assemble, in physical
+    /// link numbers) the slot holds a half-built mode and must be rebuilt before use.
     pub fn rebuild(
         &mut self,
         params: &CccParams<T>,
@@ -124,14 +126,10 @@ impl<T: Real> Slot<T> {
         coords: Coordinates,
         pose: &[T; 9],
         time: f64,
-    ) -> Result<[T; 2], StepError> {
+    ) -> Result<[T; 2], TwinStepError> {
         self.built = false;
-        self.map = build_into(params, mode, coords, pose, &mut self.model).map_err(|_| {
-            StepError::NonFinite {
-                time,
-                what: "converter model at this pose",
-            }
-        })?;
+        self.map = build_into(params, mode, coords, pose, &mut self.model)
+            .map_err(|error| TwinStepError::Model { time, mode, error })?;
         self.mode = mode;
         self.coords = coords;
         // `assemble` resets the data of the model's groups itself.
@@ -156,7 +154,7 @@ impl<T: Real> Slot<T> {
         coords: Coordinates,
         pose: &[T; 9],
         time: f64,
-    ) -> Result<[T; 2], StepError> {
+    ) -> Result<[T; 2], TwinStepError> {
         // The declared parts first: they need no position pass.
         if self.built && self.mode == mode && self.coords == coords && self.declares(pose) {
             let q = self.map.coordinates_at(pose);
@@ -211,14 +209,14 @@ impl<T: Real> Slot<T> {
 
     /// Assembles the slot's model at the physical angles `pose` from a fresh workspace;
     /// returns the coordinates there.
-    fn assemble_at(&mut self, pose: &[T; 9], time: f64) -> Result<[T; 2], StepError> {
+    fn assemble_at(&mut self, pose: &[T; 9], time: f64) -> Result<[T; 2], TwinStepError> {
         let q = self.map.coordinates_at(pose);
         assemble(
             &self.model,
             &mut self.ws,
             q.get(..self.map.dof).unwrap_or(&[]),
         )
-        .map_err(|e| physical(&self.map, retime(e, time)))?;
+        .map_err(|e| TwinStepError::Step(physical(&self.map, retime(e, time))))?;
         Ok(q)
     }
 
@@ -665,8 +663,53 @@ mod tests {
     use super::super::super::build::initial_pose;
     use super::super::super::mode::Mode;
     use super::super::super::params::CccParams;
+    use super::super::error::TwinStepError;
     use super::{unwrap_near, Slot, STATE};
+    use crate::ccc::mode_model;
     use nalgebra::SVector;
+    extern crate std;
+    use std::string::ToString;
+
+    /// A mode whose model cannot be built at a pose (a locked lever's pin at a
+    /// non-finite angle) fails the slot's rebuild with the model builder's own error,
+    /// the one the public builder [`mode_model`] gives at that pose (the oracle), named
+    /// with the mode and time, not as a non-finite evaluation.
+    #[test]
+    fn a_model_that_cannot_be_built_keeps_the_builders_error() {
+        let p = CccParams::<f64>::reference();
+        let good = initial_pose(&p, 105f64.to_radians(), 90f64.to_radians()).unwrap();
+        let mut slot = Slot::empty();
+        let mut named = 0;
+        for (mode, lever) in [(Mode::I6, 6), (Mode::I8, 8), (Mode::Jam, 6)] {
+            for bad in [f64::NAN, f64::INFINITY] {
+                let mut pose = good;
+                pose[lever] = bad;
+                for coords in mode.coordinate_choices() {
+                    let Err(want) = mode_model(&p, mode, *coords, &pose) else {
+                        continue;
+                    };
+                    let got = slot.rebuild(&p, mode, *coords, &pose, 0.25).unwrap_err();
+                    assert_eq!(
+                        got,
+                        TwinStepError::Model {
+                            time: 0.25,
+                            mode,
+                            error: want
+                        },
+                        "{mode} {coords:?}"
+                    );
+                    let msg = got.to_string();
+                    assert!(
+                        msg.contains(&want.to_string()) && msg.contains("t = 0.250000 s"),
+                        "{msg}"
+                    );
+                    assert!(!slot.built);
+                    named += 1;
+                }
+            }
+        }
+        assert!(named >= 6, "{named}");
+    }
 
     /// The rows the impact's constraints are made of (`omega_row`, `lever_row`): each
     /// link's angular speed per unit rate of each coordinate, against a central finite
