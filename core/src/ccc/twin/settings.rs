@@ -1,6 +1,7 @@
 //! The twin's settings fixed at start, and the bounds and thresholds of its step.
 
 use super::slot::LinkState;
+use crate::balance;
 use crate::scalar::Real;
 
 /// Events per step at most (see the module docs for what happens past it).
@@ -13,8 +14,9 @@ pub const MAX_LOCATE_ITER: usize = 16;
 pub const MAX_RETRIES: usize = 2;
 
 /// Sub-steps tried in turn when a step breaks the energy balance (see
-/// [`TwinSettings::energy_tol`]): at most 1 + 4 + 16 DP5 steps' work.
-pub const SUBSTEPS: [u32; 3] = [1, 4, 16];
+/// [`TwinSettings::energy_tol`]): the core's division of a fixed step, at most
+/// 1 + 4 + 16 DP5 steps' work.
+pub use crate::balance::SUBSTEPS;
 
 /// Below this conditioning of its worst group, a [`TwinStepError::Diverged`](super::TwinStepError::Diverged) step is taken
 /// to run into a singularity of the mechanism rather than to be too coarse.
@@ -51,7 +53,8 @@ pub struct TwinSettings<T> {
     /// [`SUBSTEPS`]; if even the finest fails, the step fails with
     /// [`TwinStepError::Diverged`](super::TwinStepError::Diverged) and the twin keeps its last good state. S2's steps stay
     /// under 4e-11; S1's last steps before the diode stretches grow past 1e-9 each.
-    /// Reference: 1e-9, or 1000 ulps of the scalar if that is larger (f32).
+    /// Reference: the core's energy balance tolerance ([`balance::tolerance`]: 1e-9,
+    /// or 1000 ulps of the scalar if that is larger, f32).
     pub energy_tol: T,
 }
 
@@ -66,8 +69,7 @@ impl<T: Real> TwinSettings<T> {
             crank_speed: T::zero(),
             swing_speed: T::zero(),
             switch_below: T::c(0.2),
-            // f32 rounds the energies to ~1e-7 of their size: 1e3 ulps then.
-            energy_tol: T::c(1e-9).max(T::EPS * T::c(1e3)),
+            energy_tol: balance::tolerance(),
         }
     }
 }
