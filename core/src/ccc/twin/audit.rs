@@ -1,10 +1,12 @@
 //! The energy audit (SPEC 3).
 
+use super::super::build::physical_link;
+use super::super::params::CccParams;
 use super::error::{Failure, TwinStepError};
-use super::slot::{physical_energy, LinkState, W_LOAD, W_MOTOR};
+use super::slot::{LinkState, W_LOAD, W_MOTOR};
 use super::{shaft_speed, Twin, Work};
 use crate::error::{GroupFault, StepError};
-use crate::scalar::Real;
+use crate::scalar::{perp, rotate_cs, Real, Vec2};
 
 /// The energy audit (SPEC 3): `motor work = Δ(kinetic + potential) + load work + impact
 /// losses`, each term in J since the start.
@@ -32,6 +34,37 @@ impl<T: Real> Audit<T> {
             - self.load_work
             - self.impact_loss
     }
+}
+
+/// A physical link's mass, its moment of inertia about its COG and the COG in its
+/// frame (the rocker carries the oscillating mass).
+fn mass_properties<T: Real>(params: &CccParams<T>, p: usize) -> (T, T, Vec2<T>) {
+    let l = physical_link(params, p);
+    (l.mass, l.inertia, l.cog)
+}
+
+/// Kinetic and potential energy of the physical links (and of the shaft turning at
+/// `shaft_speed`), J: computed from the physical state (the links and their frame
+/// directions, [`Slot::frames`]), independently of the mode's model.
+fn physical_energy<T: Real>(
+    params: &CccParams<T>,
+    links: &[LinkState<T>; 9],
+    frames: &[Vec2<T>; 9],
+    shaft_speed: T,
+) -> (T, T) {
+    let half = T::c(0.5);
+    let (mut k, mut u) = (
+        half * params.shaft_inertia * shaft_speed * shaft_speed,
+        T::zero(),
+    );
+    for (p, (s, f)) in links.iter().zip(frames.iter()).enumerate().skip(1) {
+        let (m, i, c) = mass_properties(params, p);
+        let r = rotate_cs(f.x, f.y, &c);
+        let v = s.velocity + perp(&r) * s.omega;
+        k += half * (m * v.norm_squared() + i * s.omega * s.omega);
+        u -= m * params.gravity.dot(&(s.origin + r));
+    }
+    (k, u)
 }
 
 /// The audit's terms are finite, or the error that says they are not. The works are

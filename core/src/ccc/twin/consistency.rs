@@ -4,8 +4,9 @@
 use super::super::build::BRANCHES;
 use super::super::mode::{Clutch, Mode};
 use super::impact::constraint_rows;
+use super::inputs::Inputs;
 use super::settings::*;
-use super::slot::{Inputs, LinkState, QD, STATE};
+use super::slot::{LinkState, QD, STATE};
 use super::{shaft_accel, shaft_speed, Twin};
 use crate::scalar::Real;
 use nalgebra::{SMatrix, SVector};
@@ -197,7 +198,8 @@ impl<T: Real> Twin<T> {
 mod tests {
     use super::super::super::mode::Mode;
     use super::super::super::params::CccParams;
-    use super::super::slot::{Inputs, LinkState, MotorInput};
+    use super::super::inputs::{Inputs, MotorInput};
+    use super::super::slot::LinkState;
     use super::super::{Twin, TwinSettings};
     use super::torques_clear;
 

@@ -3,7 +3,8 @@
 use super::super::mode::{Coordinates, Mode};
 use super::super::params::CccParams;
 use super::error::{Failure, TwinStepError};
-use super::slot::{physical, Inputs, Slot};
+use super::inputs::Inputs;
+use super::slot::{physical, Slot};
 use super::{joint_gap, load_state, Twin, Work};
 use crate::error::StepError;
 use crate::scalar::Real;

@@ -7,7 +7,8 @@
 
 use super::error::TwinStepError;
 use super::guards::Guards;
-use super::slot::{Inputs, LinkState};
+use super::inputs::Inputs;
+use super::slot::LinkState;
 use super::{Twin, Work};
 use crate::dynamics::finish_accelerations;
 use crate::kinetostatics::reactions;

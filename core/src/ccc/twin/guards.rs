@@ -4,8 +4,9 @@
 
 use super::super::build::BRANCHES;
 use super::super::mode::{Clutch, Mode};
+use super::inputs::Inputs;
 use super::settings::*;
-use super::slot::{Inputs, LinkState, Slot};
+use super::slot::{LinkState, Slot};
 use super::{shaft_accel, shaft_speed, Twin};
 use crate::scalar::Real;
 

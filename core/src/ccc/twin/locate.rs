@@ -4,8 +4,9 @@
 use super::error::TwinStepError;
 use super::evaluate::{Stage, Torques};
 use super::guards::{EventKind, Fired, Guard, Guards};
+use super::inputs::Inputs;
 use super::settings::*;
-use super::slot::{Inputs, STATE};
+use super::slot::STATE;
 use super::{Twin, Work};
 use crate::scalar::Real;
 use nalgebra::SVector;

@@ -3,17 +3,20 @@
 //! consistency conditions, plastic impacts, and coordinate switches at dead points.
 //!
 //! The rooms, one idea each: the step itself ([`Twin::step`], here); its settings,
-//! bounds and thresholds (`settings.rs`); its errors (`error.rs`); the event functions
-//! (`guards.rs`) and their location inside a step (`locate.rs`); the mode choice at an
-//! event (`choice.rs`) by the consistency conditions (`consistency.rs`) and the
-//! plastic impact (`impact.rs`); coordinate choice and switching (`coordinates.rs`);
-//! one mode's model and workspace (`slot.rs`), the three working slots (`slots.rs`) and
-//! their staged evaluation (`evaluate.rs`); the energy audit (`audit.rs`).
+//! bounds and thresholds (`settings.rs`); its inputs (`inputs.rs`) and what it reports
+//! (`outputs.rs`); its errors (`error.rs`); the event functions (`guards.rs`) and their
+//! location inside a step (`locate.rs`); the mode choice at an event (`choice.rs`),
+//! each candidate built and judged (`candidate.rs`) by the consistency conditions
+//! (`consistency.rs`) after the plastic impact (`impact.rs`); coordinate choice and
+//! switching (`coordinates.rs`); one mode's model and workspace (`slot.rs`), the three
+//! working slots (`slots.rs`) and their staged evaluation (`evaluate.rs`); the energy
+//! audit (`audit.rs`).
 //!
 //! The twin's contract (bounded work, no allocation, size, step sizes, placement in
 //! firmware) is on [`Twin`].
 
 mod audit;
+mod candidate;
 mod choice;
 mod consistency;
 mod coordinates;
@@ -21,7 +24,9 @@ mod error;
 mod evaluate;
 mod guards;
 mod impact;
+mod inputs;
 mod locate;
+mod outputs;
 mod settings;
 mod slot;
 mod slots;
@@ -30,25 +35,27 @@ pub use audit::Audit;
 pub use coordinates::CoordinateSwitch;
 pub use error::{Failure, TwinSetupError, TwinStepError};
 pub use guards::{Event, EventKind};
+pub use inputs::{Inputs, MotorInput};
 pub use settings::{
     TwinSettings, DIODE_HORIZON_STEPS, MAX_EVENTS_PER_STEP, MAX_LOCATE_ITER, MAX_RETRIES,
     SINGULAR_CONDITIONING, SUBSTEPS,
 };
-pub use slot::{Inputs, LinkState, MotorInput, JOINTS, JOINT_NAMES};
+pub use slot::{LinkState, JOINTS, JOINT_NAMES};
 
 use super::build::{initial_pose, CRANK};
-use super::mode::{Clutch, Coordinates, Mode};
+use super::mode::{Clutch, Mode};
 use super::params::CccParams;
 use crate::error::StepError;
 use crate::integrator::Dp5;
-use crate::motor::Motor;
 use crate::scalar::{Real, Vec2};
 use crate::workspace::WarmStart;
 use audit::audit_finite;
 use coordinates::best_slot;
 use evaluate::{Stage, TorqueSource, Torques};
 use guards::Guards;
+use inputs::{check_inputs, same_inputs};
 use nalgebra::SVector;
+use settings::check_settings;
 use slot::{unwrap_near, Equations, Slot, QD, STATE};
 use slots::Slots;
 
@@ -478,145 +485,6 @@ impl<T: Real> Twin<T> {
         self.joints = self.slots.cur().joint_reactions(&self.params, &links);
         self.audit = audit;
     }
-
-    /// Time, s.
-    pub fn time(&self) -> T {
-        self.t
-    }
-
-    /// Steps taken.
-    pub fn steps(&self) -> u64 {
-        self.steps
-    }
-
-    /// The fixed step, s.
-    pub fn h(&self) -> T {
-        self.settings.h
-    }
-
-    /// The parameters.
-    pub fn params(&self) -> &CccParams<T> {
-        &self.params
-    }
-
-    /// The current mode.
-    pub fn mode(&self) -> Mode {
-        self.slots.cur().mode
-    }
-
-    /// The current independent coordinates.
-    pub fn coordinates(&self) -> Coordinates {
-        self.slots.cur().coords
-    }
-
-    /// Values of the current coordinates (`[..dof]`), rad.
-    pub fn q(&self) -> &[T] {
-        self.y
-            .as_slice()
-            .get(..self.slots.cur().map.dof.min(2))
-            .unwrap_or(&[])
-    }
-
-    /// Their speeds, rad/s.
-    pub fn qd(&self) -> &[T] {
-        self.y
-            .as_slice()
-            .get(QD..QD + self.slots.cur().map.dof.min(2))
-            .unwrap_or(&[])
-    }
-
-    /// Their accelerations, rad/s².
-    pub fn qdd(&self) -> &[T] {
-        self.slots
-            .cur()
-            .ws
-            .qdd
-            .get(..self.slots.cur().map.dof.min(2))
-            .unwrap_or(&[])
-    }
-
-    /// Physical state of link `p` (1..=8).
-    pub fn link(&self, p: usize) -> LinkState<T> {
-        self.links.get(p).copied().unwrap_or_default()
-    }
-
-    /// World position of point `point` (0 or 1: a bar's first or second joint; 2: D on
-    /// the rocker) of physical link `p`, m.
-    pub fn joint_position(&self, p: usize, point: usize) -> Vec2<T> {
-        let s = self.link(p);
-        let x = match point {
-            0 => T::zero(),
-            1 => self.params.link(p).length,
-            _ => self.params.rocker_d,
-        };
-        s.origin + Vec2::new(s.theta.cos(), s.theta.sin()) * x
-    }
-
-    /// Shaft speed, rad/s, CCW positive (0 while held).
-    pub fn shaft_speed(&self) -> T {
-        shaft_speed(self.slots.cur().mode, &self.links)
-    }
-
-    /// Shaft angle turned since the start, rad, CCW positive.
-    pub fn shaft_angle(&self) -> T {
-        self.shaft_angle
-    }
-
-    /// Transmitted torques `[c6, c8]`, N·m, positive in the drive direction.
-    pub fn clutch_torques(&self) -> [T; 2] {
-        self.c
-    }
-
-    /// Reactions at the physical joints ([`JOINTS`]), N.
-    pub fn joint_reactions(&self) -> &[Vec2<T>; 11] {
-        &self.joints
-    }
-
-    /// Motor torque at the current state, N·m.
-    pub fn motor_torque(&self) -> T {
-        let c = self.link(CRANK);
-        self.inputs.motor.torque(self.t, c.theta, c.omega)
-    }
-
-    /// The energy audit.
-    pub fn audit(&self) -> Audit<T> {
-        self.audit
-    }
-
-    /// Crank angle and speed minus the measured ones given with the last step's inputs.
-    pub fn measurement_residual(&self) -> Option<(T, T)> {
-        let c = self.link(CRANK);
-        self.inputs
-            .measured
-            .map(|(a, w)| (c.theta - a, c.omega - w))
-    }
-
-    /// The mode changes of the last step (or of the setup).
-    pub fn events(&self) -> &[Event<T>] {
-        &self.events
-    }
-
-    /// The coordinate switches of the last step.
-    pub fn switches(&self) -> &[CoordinateSwitch<T>] {
-        &self.switches
-    }
-
-    /// The candidates of the last mode choice, in the order tried, with how far each
-    /// violates SPEC 3's consistency conditions (0: consistent; infinite: its
-    /// constraints are rank-deficient or it cannot assemble).
-    pub fn candidates(&self) -> &[(Mode, T)] {
-        &self.candidates
-    }
-
-    /// Smallest normalized determinant over the current sequence's groups.
-    pub fn conditioning(&self) -> T {
-        self.slots.cur().conditioning()
-    }
-
-    /// The current mode's core model.
-    pub fn model(&self) -> &crate::model::Model<T> {
-        &self.slots.cur().model
-    }
 }
 
 // ---- helpers ----
@@ -669,91 +537,4 @@ fn shaft_accel<T: Real>(mode: Mode, links: &[LinkState<T>; 9]) -> T {
 
 fn same_bits<T: Real>(a: T, b: T) -> bool {
     a.to_f64().to_bits() == b.to_f64().to_bits()
-}
-
-fn same_inputs<T: Real>(a: &Inputs<T>, b: &Inputs<T>) -> bool {
-    use slot::MotorInput;
-    let motor = match (a.motor, b.motor) {
-        (MotorInput::Torque(x), MotorInput::Torque(y)) => same_bits(x, y),
-        (MotorInput::Law(_), MotorInput::Law(_)) => true,
-        _ => false,
-    };
-    motor && same_bits(a.load, b.load)
-}
-
-/// A motor law's first parameter that is not finite, named, if any (a user
-/// function's value is checked where it is evaluated).
-fn law_fault<T: Real>(m: &Motor<T>) -> Option<(&'static str, T)> {
-    match *m {
-        Motor::Constant(c) => Some(("motor law's constant torque", c)),
-        Motor::Asynchronous(a) => [
-            ("motor law's coefficient a", a.a),
-            ("motor law's coefficient b", a.b),
-            ("motor law's coefficient c", a.c),
-        ]
-        .into_iter()
-        .find(|(_, v)| !v.finite()),
-        Motor::User(_) => None,
-    }
-    .filter(|(_, v)| !v.finite())
-}
-
-/// The settings are in range, or the error that names the first that is not.
-fn check_settings<T: Real>(s: &TwinSettings<T>) -> Result<(), TwinSetupError> {
-    let positive = |x: T| x.finite() && x > T::zero();
-    let checks = [
-        ("h", s.h, positive(s.h)),
-        (
-            "switch_below",
-            s.switch_below,
-            positive(s.switch_below) && s.switch_below < T::one(),
-        ),
-        ("energy_tol", s.energy_tol, positive(s.energy_tol)),
-        ("crank", s.crank, s.crank.finite()),
-        ("swing", s.swing, s.swing.finite()),
-        ("crank_speed", s.crank_speed, s.crank_speed.finite()),
-        ("swing_speed", s.swing_speed, s.swing_speed.finite()),
-    ];
-    match checks.iter().find(|(_, _, ok)| !ok) {
-        Some((field, value, _)) => Err(TwinSetupError::Setting {
-            field,
-            value: value.to_f64(),
-        }),
-        None => Ok(()),
-    }
-}
-
-/// The per-step inputs are valid, or the error that names the first that is not
-/// (`time`: the twin's, s).
-fn check_inputs<T: Real>(inputs: &Inputs<T>, time: T) -> Result<(), TwinStepError> {
-    let bad = |field, value: T| {
-        Err(TwinStepError::BadInput {
-            time: time.to_f64(),
-            field,
-            value: value.to_f64(),
-        })
-    };
-    if !(inputs.load.finite() && inputs.load >= T::zero()) {
-        return bad("load", inputs.load);
-    }
-    match inputs.motor {
-        MotorInput::Torque(v) if !v.finite() => return bad("motor torque", v),
-        // A law's parameters are checked here; what a user function returns is checked
-        // at every evaluation (a non-finite torque fails the step, state kept).
-        MotorInput::Law(m) => {
-            if let Some((field, value)) = law_fault(&m) {
-                return bad(field, value);
-            }
-        }
-        _ => {}
-    }
-    if let Some((a, w)) = inputs.measured {
-        if !a.finite() {
-            return bad("measured crank angle", a);
-        }
-        if !w.finite() {
-            return bad("measured crank speed", w);
-        }
-    }
-    Ok(())
 }

@@ -1,5 +1,6 @@
 //! The twin's settings fixed at start, and the bounds and thresholds of its step.
 
+use super::error::TwinSetupError;
 use super::slot::LinkState;
 use crate::balance;
 use crate::scalar::Real;
@@ -107,4 +108,29 @@ pub(super) fn speed_tol<T: Real>() -> T {
 /// which moves a release by ~1e-5 s in S2.
 pub(super) fn torque_tol<T: Real>(s: T) -> T {
     (T::c(1e-9) * s).max(T::EPS * (T::c(10.0) * s + T::c(1e4)))
+}
+
+/// The settings are in range, or the error that names the first that is not.
+pub(super) fn check_settings<T: Real>(s: &TwinSettings<T>) -> Result<(), TwinSetupError> {
+    let positive = |x: T| x.finite() && x > T::zero();
+    let checks = [
+        ("h", s.h, positive(s.h)),
+        (
+            "switch_below",
+            s.switch_below,
+            positive(s.switch_below) && s.switch_below < T::one(),
+        ),
+        ("energy_tol", s.energy_tol, positive(s.energy_tol)),
+        ("crank", s.crank, s.crank.finite()),
+        ("swing", s.swing, s.swing.finite()),
+        ("crank_speed", s.crank_speed, s.crank_speed.finite()),
+        ("swing_speed", s.swing_speed, s.swing_speed.finite()),
+    ];
+    match checks.iter().find(|(_, _, ok)| !ok) {
+        Some((field, value, _)) => Err(TwinSetupError::Setting {
+            field,
+            value: value.to_f64(),
+        }),
+        None => Ok(()),
+    }
 }

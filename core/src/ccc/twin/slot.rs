@@ -2,17 +2,17 @@
 //! the equations of motion with the twin's inputs, the physical state of every link,
 //! the transmitted torques c6, c8 and the joint reactions.
 
-use super::super::build::{build_into, physical_link, BodyMap, BRANCHES, CRANK};
+use super::super::build::{build_into, BodyMap, BRANCHES, CRANK};
 use super::super::mode::{Clutch, Coordinates, Mode};
 use super::super::params::CccParams;
 use super::error::TwinStepError;
+use super::inputs::Inputs;
 use crate::dynamics::solve_accelerations;
 use crate::error::{GroupId, StepError};
 use crate::integrator::OdeSystem;
 use crate::kinematics::assemble;
 use crate::kinematics::{group_id, position};
 use crate::model::{Model, ModelBuilder};
-use crate::motor::Motor;
 use crate::scalar::{cross, perp, rotate_cs, Real, Vec2};
 use crate::structomat::GroupKind;
 use crate::structomat::JointKind;
@@ -30,25 +30,6 @@ pub(crate) const QD: usize = 2;
 pub(crate) const W_MOTOR: usize = 4;
 /// Index of the work done against the load.
 pub(crate) const W_LOAD: usize = 5;
-
-/// The motor acting on the crank (link 1, reaction on the ground).
-#[derive(Clone, Copy, Debug)]
-pub enum MotorInput<T: Real> {
-    /// A torque, N·m, CCW positive (e.g. measured on the prototype), held over the step.
-    Torque(T),
-    /// A motor law of time, crank angle and crank speed, evaluated at every stage.
-    Law(Motor<T>),
-}
-
-impl<T: Real> MotorInput<T> {
-    /// The torque at time `t` (s), crank angle `theta` (rad) and speed `omega` (rad/s).
-    pub fn torque(&self, t: T, theta: T, omega: T) -> T {
-        match self {
-            MotorInput::Torque(v) => *v,
-            MotorInput::Law(m) => m.torque(t, theta, omega),
-        }
-    }
-}
 
 /// A link's physical state (SPEC 3's numbering), whatever the mode's model.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -556,17 +537,6 @@ pub const JOINTS: [(u8, u8); 11] = [
 /// Names of [`JOINTS`], for CSV headers.
 pub const JOINT_NAMES: [&str; 11] = ["A", "B", "C", "E", "F", "D5", "D7", "G", "I", "H6", "H8"];
 
-/// What the twin is given each step.
-#[derive(Clone, Copy, Debug)]
-pub struct Inputs<T: Real> {
-    /// The motor on the crank.
-    pub motor: MotorInput<T>,
-    /// The load's resistive torque on the shaft T_r ≥ 0, N·m.
-    pub load: T,
-    /// A measured crank angle (rad) and speed (rad/s) to compare against.
-    pub measured: Option<(T, T)>,
-}
-
 /// The ODE of a slot with its inputs, for the integrator.
 pub(crate) struct Equations<'a, T: Real> {
     pub slot: &'a mut Slot<T>,
@@ -586,37 +556,6 @@ impl<T: Real> OdeSystem<T, STATE> for Equations<'_, T> {
         *dy = self.slot.rates(y, self.inputs, self.drive);
         Ok(())
     }
-}
-
-/// A physical link's mass, its moment of inertia about its COG and the COG in its
-/// frame (the rocker carries the oscillating mass).
-pub(crate) fn mass_properties<T: Real>(params: &CccParams<T>, p: usize) -> (T, T, Vec2<T>) {
-    let l = physical_link(params, p);
-    (l.mass, l.inertia, l.cog)
-}
-
-/// Kinetic and potential energy of the physical links (and of the shaft turning at
-/// `shaft_speed`), J: computed from the physical state (the links and their frame
-/// directions, [`Slot::frames`]), independently of the mode's model.
-pub(crate) fn physical_energy<T: Real>(
-    params: &CccParams<T>,
-    links: &[LinkState<T>; 9],
-    frames: &[Vec2<T>; 9],
-    shaft_speed: T,
-) -> (T, T) {
-    let half = T::c(0.5);
-    let (mut k, mut u) = (
-        half * params.shaft_inertia * shaft_speed * shaft_speed,
-        T::zero(),
-    );
-    for (p, (s, f)) in links.iter().zip(frames.iter()).enumerate().skip(1) {
-        let (m, i, c) = mass_properties(params, p);
-        let r = rotate_cs(f.x, f.y, &c);
-        let v = s.velocity + perp(&r) * s.omega;
-        k += half * (m * v.norm_squared() + i * s.omega * s.omega);
-        u -= m * params.gravity.dot(&(s.origin + r));
-    }
-    (k, u)
 }
 
 fn retime(e: StepError, time: f64) -> StepError {
@@ -659,104 +598,4 @@ pub(crate) fn unwrap_near<T: Real>(a: T, reference: T) -> T {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::super::super::build::initial_pose;
-    use super::super::super::mode::Mode;
-    use super::super::super::params::CccParams;
-    use super::super::error::TwinStepError;
-    use super::{unwrap_near, Slot, STATE};
-    use crate::ccc::mode_model;
-    use nalgebra::SVector;
-    extern crate std;
-    use std::string::ToString;
-
-    /// A mode whose model cannot be built at a pose (a locked lever's pin at a
-    /// non-finite angle) fails the slot's rebuild with the model builder's own error,
-    /// the one the public builder [`mode_model`] gives at that pose (the oracle), named
-    /// with the mode and time, not as a non-finite evaluation.
-    #[test]
-    fn a_model_that_cannot_be_built_keeps_the_builders_error() {
-        let p = CccParams::<f64>::reference();
-        let good = initial_pose(&p, 105f64.to_radians(), 90f64.to_radians()).unwrap();
-        let mut slot = Slot::empty();
-        let mut named = 0;
-        for (mode, lever) in [(Mode::I6, 6), (Mode::I8, 8), (Mode::Jam, 6)] {
-            for bad in [f64::NAN, f64::INFINITY] {
-                let mut pose = good;
-                pose[lever] = bad;
-                for coords in mode.coordinate_choices() {
-                    let Err(want) = mode_model(&p, mode, *coords, &pose) else {
-                        continue;
-                    };
-                    let got = slot.rebuild(&p, mode, *coords, &pose, 0.25).unwrap_err();
-                    assert_eq!(
-                        got,
-                        TwinStepError::Model {
-                            time: 0.25,
-                            mode,
-                            error: want
-                        },
-                        "{mode} {coords:?}"
-                    );
-                    let msg = got.to_string();
-                    assert!(
-                        msg.contains(&want.to_string()) && msg.contains("t = 0.250000 s"),
-                        "{msg}"
-                    );
-                    assert!(!slot.built);
-                    named += 1;
-                }
-            }
-        }
-        assert!(named >= 6, "{named}");
-    }
-
-    /// The rows the impact's constraints are made of (`omega_row`, `lever_row`): each
-    /// link's angular speed per unit rate of each coordinate, against a central finite
-    /// difference of the link's angle in the coordinate (step 1e-6 rad: error ~1e-12
-    /// from the third derivative, ~1e-10 from rounding), in every coordinate choice of
-    /// I0 and of I6 (lever 6 locked: its row is zero).
-    #[test]
-    fn each_link_speed_row_is_the_derivative_of_its_angle() {
-        let p = CccParams::<f64>::reference();
-        let pose = initial_pose(&p, 105f64.to_radians(), 90f64.to_radians()).unwrap();
-        let mut slot = Slot::empty();
-        let eps = 1e-6;
-        for mode in [Mode::I0, Mode::I6] {
-            for coords in mode.coordinate_choices() {
-                let q = slot.rebuild(&p, mode, *coords, &pose, 0.0).unwrap();
-                let n = slot.map.dof;
-                let angles = |slot: &mut Slot<f64>, q: [f64; 2]| {
-                    let mut y = SVector::<f64, STATE>::zeros();
-                    y[0] = q[0];
-                    y[1] = q[1];
-                    slot.eval_speeds(0.0, &y).unwrap();
-                    slot.links(&p).map(|l| l.theta)
-                };
-                angles(&mut slot, q);
-                let rows: [[f64; 2]; 9] = core::array::from_fn(|l| slot.omega_row(l));
-                for (l, row) in rows.iter().enumerate() {
-                    let r = slot.lever_row(l);
-                    assert_eq!([r[0], r[1], r[2]], [row[0], row[1], 0.0]);
-                }
-                for k in 0..n {
-                    let (mut qp, mut qm) = (q, q);
-                    qp[k] += eps;
-                    qm[k] -= eps;
-                    let (ap, am) = (angles(&mut slot, qp), angles(&mut slot, qm));
-                    for l in 1..9 {
-                        let fd = (unwrap_near(ap[l], am[l]) - am[l]) / (2.0 * eps);
-                        assert!(
-                            (rows[l][k] - fd).abs() <= 1e-6 * (1.0 + fd.abs()),
-                            "{mode} {coords:?}: link {l}, coordinate {k}: {} vs {fd}",
-                            rows[l][k]
-                        );
-                    }
-                }
-                if mode == Mode::I6 {
-                    assert_eq!(rows[6], [0.0, 0.0], "{coords:?}: locked lever 6");
-                }
-            }
-        }
-    }
-}
+mod tests;

@@ -1,0 +1,154 @@
+//! What the twin reports of its last good state: time, mode, coordinates, the links'
+//! physical state, the shaft, clutch torques, joint reactions, the audit and the logs
+//! of the last step.
+
+use super::super::build::CRANK;
+use super::super::mode::{Coordinates, Mode};
+use super::super::params::CccParams;
+use super::audit::Audit;
+use super::coordinates::CoordinateSwitch;
+use super::guards::Event;
+use super::slot::{LinkState, QD};
+use super::{shaft_speed, Twin};
+use crate::scalar::{Real, Vec2};
+
+impl<T: Real> Twin<T> {
+    /// Time, s.
+    pub fn time(&self) -> T {
+        self.t
+    }
+
+    /// Steps taken.
+    pub fn steps(&self) -> u64 {
+        self.steps
+    }
+
+    /// The fixed step, s.
+    pub fn h(&self) -> T {
+        self.settings.h
+    }
+
+    /// The parameters.
+    pub fn params(&self) -> &CccParams<T> {
+        &self.params
+    }
+
+    /// The current mode.
+    pub fn mode(&self) -> Mode {
+        self.slots.cur().mode
+    }
+
+    /// The current independent coordinates.
+    pub fn coordinates(&self) -> Coordinates {
+        self.slots.cur().coords
+    }
+
+    /// Values of the current coordinates (`[..dof]`), rad.
+    pub fn q(&self) -> &[T] {
+        self.y
+            .as_slice()
+            .get(..self.slots.cur().map.dof.min(2))
+            .unwrap_or(&[])
+    }
+
+    /// Their speeds, rad/s.
+    pub fn qd(&self) -> &[T] {
+        self.y
+            .as_slice()
+            .get(QD..QD + self.slots.cur().map.dof.min(2))
+            .unwrap_or(&[])
+    }
+
+    /// Their accelerations, rad/s².
+    pub fn qdd(&self) -> &[T] {
+        self.slots
+            .cur()
+            .ws
+            .qdd
+            .get(..self.slots.cur().map.dof.min(2))
+            .unwrap_or(&[])
+    }
+
+    /// Physical state of link `p` (1..=8).
+    pub fn link(&self, p: usize) -> LinkState<T> {
+        self.links.get(p).copied().unwrap_or_default()
+    }
+
+    /// World position of point `point` (0 or 1: a bar's first or second joint; 2: D on
+    /// the rocker) of physical link `p`, m.
+    pub fn joint_position(&self, p: usize, point: usize) -> Vec2<T> {
+        let s = self.link(p);
+        let x = match point {
+            0 => T::zero(),
+            1 => self.params.link(p).length,
+            _ => self.params.rocker_d,
+        };
+        s.origin + Vec2::new(s.theta.cos(), s.theta.sin()) * x
+    }
+
+    /// Shaft speed, rad/s, CCW positive (0 while held).
+    pub fn shaft_speed(&self) -> T {
+        shaft_speed(self.slots.cur().mode, &self.links)
+    }
+
+    /// Shaft angle turned since the start, rad, CCW positive.
+    pub fn shaft_angle(&self) -> T {
+        self.shaft_angle
+    }
+
+    /// Transmitted torques `[c6, c8]`, N·m, positive in the drive direction.
+    pub fn clutch_torques(&self) -> [T; 2] {
+        self.c
+    }
+
+    /// Reactions at the physical joints ([`JOINTS`](super::JOINTS)), N.
+    pub fn joint_reactions(&self) -> &[Vec2<T>; 11] {
+        &self.joints
+    }
+
+    /// Motor torque at the current state, N·m.
+    pub fn motor_torque(&self) -> T {
+        let c = self.link(CRANK);
+        self.inputs.motor.torque(self.t, c.theta, c.omega)
+    }
+
+    /// The energy audit.
+    pub fn audit(&self) -> Audit<T> {
+        self.audit
+    }
+
+    /// Crank angle and speed minus the measured ones given with the last step's inputs.
+    pub fn measurement_residual(&self) -> Option<(T, T)> {
+        let c = self.link(CRANK);
+        self.inputs
+            .measured
+            .map(|(a, w)| (c.theta - a, c.omega - w))
+    }
+
+    /// The mode changes of the last step (or of the setup).
+    pub fn events(&self) -> &[Event<T>] {
+        &self.events
+    }
+
+    /// The coordinate switches of the last step.
+    pub fn switches(&self) -> &[CoordinateSwitch<T>] {
+        &self.switches
+    }
+
+    /// The candidates of the last mode choice, in the order tried, with how far each
+    /// violates SPEC 3's consistency conditions (0: consistent; infinite: its
+    /// constraints are rank-deficient or it cannot assemble).
+    pub fn candidates(&self) -> &[(Mode, T)] {
+        &self.candidates
+    }
+
+    /// Smallest normalized determinant over the current sequence's groups.
+    pub fn conditioning(&self) -> T {
+        self.slots.cur().conditioning()
+    }
+
+    /// The current mode's core model.
+    pub fn model(&self) -> &crate::model::Model<T> {
+        &self.slots.cur().model
+    }
+}

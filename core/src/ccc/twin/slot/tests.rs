@@ -1,0 +1,101 @@
+//! The slot's unit tests: its speed rows against finite differences, its build errors.
+
+use super::super::super::build::initial_pose;
+use super::super::super::mode::Mode;
+use super::super::super::params::CccParams;
+use super::super::error::TwinStepError;
+use super::{unwrap_near, Slot, STATE};
+use crate::ccc::mode_model;
+use nalgebra::SVector;
+extern crate std;
+use std::string::ToString;
+
+/// A mode whose model cannot be built at a pose (a locked lever's pin at a
+/// non-finite angle) fails the slot's rebuild with the model builder's own error,
+/// the one the public builder [`mode_model`] gives at that pose (the oracle), named
+/// with the mode and time, not as a non-finite evaluation.
+#[test]
+fn a_model_that_cannot_be_built_keeps_the_builders_error() {
+    let p = CccParams::<f64>::reference();
+    let good = initial_pose(&p, 105f64.to_radians(), 90f64.to_radians()).unwrap();
+    let mut slot = Slot::empty();
+    let mut named = 0;
+    for (mode, lever) in [(Mode::I6, 6), (Mode::I8, 8), (Mode::Jam, 6)] {
+        for bad in [f64::NAN, f64::INFINITY] {
+            let mut pose = good;
+            pose[lever] = bad;
+            for coords in mode.coordinate_choices() {
+                let Err(want) = mode_model(&p, mode, *coords, &pose) else {
+                    continue;
+                };
+                let got = slot.rebuild(&p, mode, *coords, &pose, 0.25).unwrap_err();
+                assert_eq!(
+                    got,
+                    TwinStepError::Model {
+                        time: 0.25,
+                        mode,
+                        error: want
+                    },
+                    "{mode} {coords:?}"
+                );
+                let msg = got.to_string();
+                assert!(
+                    msg.contains(&want.to_string()) && msg.contains("t = 0.250000 s"),
+                    "{msg}"
+                );
+                assert!(!slot.built);
+                named += 1;
+            }
+        }
+    }
+    assert!(named >= 6, "{named}");
+}
+
+/// The rows the impact's constraints are made of (`omega_row`, `lever_row`): each
+/// link's angular speed per unit rate of each coordinate, against a central finite
+/// difference of the link's angle in the coordinate (step 1e-6 rad: error ~1e-12
+/// from the third derivative, ~1e-10 from rounding), in every coordinate choice of
+/// I0 and of I6 (lever 6 locked: its row is zero).
+#[test]
+fn each_link_speed_row_is_the_derivative_of_its_angle() {
+    let p = CccParams::<f64>::reference();
+    let pose = initial_pose(&p, 105f64.to_radians(), 90f64.to_radians()).unwrap();
+    let mut slot = Slot::empty();
+    let eps = 1e-6;
+    for mode in [Mode::I0, Mode::I6] {
+        for coords in mode.coordinate_choices() {
+            let q = slot.rebuild(&p, mode, *coords, &pose, 0.0).unwrap();
+            let n = slot.map.dof;
+            let angles = |slot: &mut Slot<f64>, q: [f64; 2]| {
+                let mut y = SVector::<f64, STATE>::zeros();
+                y[0] = q[0];
+                y[1] = q[1];
+                slot.eval_speeds(0.0, &y).unwrap();
+                slot.links(&p).map(|l| l.theta)
+            };
+            angles(&mut slot, q);
+            let rows: [[f64; 2]; 9] = core::array::from_fn(|l| slot.omega_row(l));
+            for (l, row) in rows.iter().enumerate() {
+                let r = slot.lever_row(l);
+                assert_eq!([r[0], r[1], r[2]], [row[0], row[1], 0.0]);
+            }
+            for k in 0..n {
+                let (mut qp, mut qm) = (q, q);
+                qp[k] += eps;
+                qm[k] -= eps;
+                let (ap, am) = (angles(&mut slot, qp), angles(&mut slot, qm));
+                for l in 1..9 {
+                    let fd = (unwrap_near(ap[l], am[l]) - am[l]) / (2.0 * eps);
+                    assert!(
+                        (rows[l][k] - fd).abs() <= 1e-6 * (1.0 + fd.abs()),
+                        "{mode} {coords:?}: link {l}, coordinate {k}: {} vs {fd}",
+                        rows[l][k]
+                    );
+                }
+            }
+            if mode == Mode::I6 {
+                assert_eq!(rows[6], [0.0, 0.0], "{coords:?}: locked lever 6");
+            }
+        }
+    }
+}
