@@ -225,26 +225,27 @@ impl<T: Real> Twin<T> {
         for (p, l) in twin.links.iter_mut().enumerate() {
             l.theta = pose[p];
         }
-        let mut w = Work {
-            t: T::zero(),
-            y: twin.y,
-            impact: T::zero(),
-            switched: false,
-            chosen: false,
-        };
-        twin.restart_at(&w, &inputs)?;
-        if settings.clutch {
-            twin.choose(&mut w, EventKind::Start, &inputs)?;
-        }
-        twin.settle_clutch_torques(&w, &inputs)?;
-        twin.y = w.y;
-        let links = twin.slots.cur().links(&twin.params);
-        let audit = twin.audit_of(&links, &w);
-        audit_finite(&audit, w.t)?;
-        twin.commit(&w, audit, links);
-        let (k, u) = (twin.audit.kinetic, twin.audit.potential);
-        twin.audit.initial = k + u;
+        twin.start(&inputs)?;
         Ok(twin)
+    }
+
+    /// The start at the initial state: its first evaluation, with the diode its first
+    /// mode chosen by the consistency conditions, and the audit's initial energy.
+    fn start(&mut self, inputs: &Inputs<T>) -> Result<(), TwinStepError> {
+        let mut w = self.work_from_state();
+        self.restart_at(&w, inputs)?;
+        if self.settings.clutch {
+            self.choose(&mut w, EventKind::Start, inputs)?;
+        }
+        self.settle_clutch_torques(&w, inputs)?;
+        self.y = w.y;
+        let links = self.slots.cur().links(&self.params);
+        let audit = self.audit_of(&links, &w);
+        audit_finite(&audit, w.t)?;
+        self.commit(&w, audit, links);
+        let (k, u) = (self.audit.kinetic, self.audit.potential);
+        self.audit.initial = k + u;
+        Ok(())
     }
 
     /// One step of `h` under `inputs` (held over the step). On error the twin keeps the
@@ -342,22 +343,10 @@ impl<T: Real> Twin<T> {
         changed: bool,
         substeps: u32,
     ) -> Result<(), TwinStepError> {
-        let t_end = T::c((self.steps + 1) as f64) * self.settings.h;
-        if !t_end.finite() {
-            return Err(TwinStepError::TimeOverflow {
-                steps: self.steps,
-                h: self.settings.h.to_f64(),
-            });
-        }
+        let t_end = self.step_end()?;
         let h_max = self.settings.h / T::c(substeps as f64);
         if changed {
-            // Inputs changed: re-evaluate here and see whether the mode still holds.
-            // The torque functions jump with the load: no earlier sample fits.
-            self.last_guards = None;
-            self.restart_at(w, inputs)?;
-            if self.settings.clutch && self.guards.any_past() {
-                self.choose(w, EventKind::Inputs, inputs)?;
-            }
+            self.new_inputs(w, inputs)?;
         }
         let mut retries = 0;
         let mut events = 0;
@@ -369,74 +358,139 @@ impl<T: Real> Twin<T> {
                 break;
             }
             let t0 = w.t;
-            let y0 = w.y;
-            let saved = self.slots.cur().ws.unknowns();
             // The last sub-step takes what is left (no sliver of a step from rounding).
             let h = if t_end - t0 > h_max * T::c(1.5) {
                 h_max
             } else {
                 t_end - t0
             };
-            let mut sys = Equations {
-                slot: self.slots.cur_mut(),
-                inputs,
-                drive: self.drive,
-            };
-            match self.dp5.step(&mut sys, &mut w.t, &mut w.y, h) {
-                Ok(_) => {}
-                Err(e) => {
-                    // Warm starts only: the step goes on from here (the cosines
-                    // and sines are taken anew from these unknowns).
-                    self.slots.cur_mut().ws.restore_unknowns(&saved);
-                    w.t = t0;
-                    w.y = y0;
-                    if retries >= MAX_RETRIES || !matches!(e, StepError::Group { .. }) {
-                        return Err(self.physical_error(e));
-                    }
-                    retries += 1;
-                    self.restart_at(w, inputs)?;
-                    self.switch_coordinates(w, inputs, Some(e))?;
-                    continue;
-                }
-            }
-            let (g0, r0) = (self.guards, self.guard_rates);
-            // Deferring the kinetostatics costs an extra look at the event functions:
-            // only worth it when a speed function is near its crossing (within 4 steps
-            // at its rate at the start).
-            let may_defer = self.settings.clutch
-                && events < MAX_EVENTS_PER_STEP
-                && g0.speed_guards().any(|(k, g)| {
-                    r0.get(k)
-                        .is_some_and(|r| g + T::c(4.0) * h * r.abs() > T::zero())
-                });
-            let torques = if may_defer {
-                Torques::DeferAtSpeedEvent(&g0, h)
-            } else {
-                Torques::Kinetostatics
-            };
-            self.evaluate_from(Stage::Accelerations, w, inputs, torques)?;
-            let fired = g0.fired(&self.guards);
-            if fired.is_empty() || events >= MAX_EVENTS_PER_STEP || !self.settings.clutch {
-                self.last_guards = fired.is_empty().then_some((g0, h));
+            if !self.dp5_step(w, inputs, h, retries < MAX_RETRIES)? {
+                retries += 1;
                 continue;
             }
-            events += 1;
-            let (theta, kind, evaluated) = self.locate(w, t0, h, (&g0, &r0), fired, inputs)?;
-            self.last_guards = None;
-            if !evaluated {
-                let mut ye = SVector::<T, STATE>::zeros();
-                self.dp5.dense(theta, &mut ye);
-                w.t = t0 + theta * h;
-                w.y = ye;
-                // The mode choice reads the old mode's positions and speeds only (the
-                // new mode is evaluated in full): no accelerations or kinetostatics.
-                self.slots
-                    .cur_mut()
-                    .eval_speeds(w.t, &w.y)
-                    .map_err(|e| self.physical_error(e))?;
+            if self.sub_step_end(w, inputs, t0, h, events < MAX_EVENTS_PER_STEP)? {
+                events += 1;
             }
-            self.choose(w, kind, inputs)?;
         }
+        self.step_end_at(w, inputs, t_end)
+    }
+
+    /// The time `(n + 1)·h` the next step ends at, s.
+    fn step_end(&self) -> Result<T, TwinStepError> {
+        let t_end = T::c((self.steps + 1) as f64) * self.settings.h;
+        if !t_end.finite() {
+            return Err(TwinStepError::TimeOverflow {
+                steps: self.steps,
+                h: self.settings.h.to_f64(),
+            });
+        }
+        Ok(t_end)
+    }
+
+    /// Inputs changed: re-evaluates at `w` and sees whether the mode still holds. The
+    /// torque functions jump with the load: no earlier sample fits.
+    fn new_inputs(&mut self, w: &mut Work<T>, inputs: &Inputs<T>) -> Result<(), TwinStepError> {
+        self.last_guards = None;
+        self.restart_at(w, inputs)?;
+        if self.settings.clutch && self.guards.any_past() {
+            self.choose(w, EventKind::Inputs, inputs)?;
+        }
+        Ok(())
+    }
+
+    /// One DP5 step of `h` from `w` in the current slot; returns whether it was taken.
+    /// If a group fails, `w` is back at the sub-step's start and, with `may_switch`,
+    /// the coordinates are switched there (the sub-step is then to be redone);
+    /// without, or for another error, the step fails.
+    fn dp5_step(
+        &mut self,
+        w: &mut Work<T>,
+        inputs: &Inputs<T>,
+        h: T,
+        may_switch: bool,
+    ) -> Result<bool, TwinStepError> {
+        let (t0, y0) = (w.t, w.y);
+        let saved = self.slots.cur().ws.unknowns();
+        let mut sys = Equations {
+            slot: self.slots.cur_mut(),
+            inputs,
+            drive: self.drive,
+        };
+        let Err(e) = self.dp5.step(&mut sys, &mut w.t, &mut w.y, h) else {
+            return Ok(true);
+        };
+        // Warm starts only: the step goes on from here (the cosines and sines are
+        // taken anew from these unknowns).
+        self.slots.cur_mut().ws.restore_unknowns(&saved);
+        w.t = t0;
+        w.y = y0;
+        if !may_switch || !matches!(e, StepError::Group { .. }) {
+            return Err(self.physical_error(e));
+        }
+        self.restart_at(w, inputs)?;
+        self.switch_coordinates(w, inputs, Some(e))?;
+        Ok(false)
+    }
+
+    /// Evaluates the end of the DP5 step just taken from `t0` (length `h`) and, with
+    /// `may_handle` (the step's events are not at their bound), handles the first event
+    /// inside it: located, the state moved there, the new mode chosen. Returns whether
+    /// it handled one.
+    fn sub_step_end(
+        &mut self,
+        w: &mut Work<T>,
+        inputs: &Inputs<T>,
+        t0: T,
+        h: T,
+        may_handle: bool,
+    ) -> Result<bool, TwinStepError> {
+        let (g0, r0) = (self.guards, self.guard_rates);
+        // Deferring the kinetostatics costs an extra look at the event functions:
+        // only worth it when a speed function is near its crossing (within 4 steps
+        // at its rate at the start).
+        let may_defer = self.settings.clutch
+            && may_handle
+            && g0.speed_guards().any(|(k, g)| {
+                r0.get(k)
+                    .is_some_and(|r| g + T::c(4.0) * h * r.abs() > T::zero())
+            });
+        let torques = if may_defer {
+            Torques::DeferAtSpeedEvent(&g0, h)
+        } else {
+            Torques::Kinetostatics
+        };
+        self.evaluate_from(Stage::Accelerations, w, inputs, torques)?;
+        let fired = g0.fired(&self.guards);
+        if fired.is_empty() || !may_handle || !self.settings.clutch {
+            self.last_guards = fired.is_empty().then_some((g0, h));
+            return Ok(false);
+        }
+        let (theta, kind, evaluated) = self.locate(w, t0, h, (&g0, &r0), fired, inputs)?;
+        self.last_guards = None;
+        if !evaluated {
+            let mut ye = SVector::<T, STATE>::zeros();
+            self.dp5.dense(theta, &mut ye);
+            w.t = t0 + theta * h;
+            w.y = ye;
+            // The mode choice reads the old mode's positions and speeds only (the
+            // new mode is evaluated in full): no accelerations or kinetostatics.
+            self.slots
+                .cur_mut()
+                .eval_speeds(w.t, &w.y)
+                .map_err(|e| self.physical_error(e))?;
+        }
+        self.choose(w, kind, inputs)?;
+        Ok(true)
+    }
+
+    /// The step's end at `t_end`: a coordinate switch if the current choice nears its
+    /// dead point, the time exactly `t_end`, the clutch torques of the kinetostatics.
+    fn step_end_at(
+        &mut self,
+        w: &mut Work<T>,
+        inputs: &Inputs<T>,
+        t_end: T,
+    ) -> Result<(), TwinStepError> {
         // Coordinates chosen at an event in this step stand until its end: the mode
         // choice took them by the same rule (the first conditioned at least
         // `switch_below`, else the best by 1.5) a fraction of the step ago. Scanning
