@@ -11,7 +11,7 @@ use super::guards::{Event, EventKind};
 use super::impact::{constraint_rows, project, rows_mismatch};
 use super::inputs::Inputs;
 use super::settings::*;
-use super::slot::{QD, STATE};
+use super::slot::{LinkState, QD, STATE};
 use super::{joint_gap, shaft_speed, Twin, Work};
 use crate::scalar::Real;
 use nalgebra::{SMatrix, SVector};
@@ -47,68 +47,41 @@ impl<T: Real> Twin<T> {
         kind: EventKind,
         inputs: &Inputs<T>,
     ) -> Result<(), TwinStepError> {
-        let time = w.t.to_f64();
         let from = self.slots.cur().mode;
         let pose = self.slot_links_unwrapped();
         let links = self.slots.cur().links(&self.params);
-        let d = self.drive;
         let shaft = shaft_speed(from, &links);
-        let scale_w = speed_scale(&links);
-        let tol_w = speed_tol::<T>() * scale_w;
-        // Which levers touch the shaft (may lock or engage), and the shaft's options.
-        let mut contact = [false; 2];
-        for (k, ((_, lever), clutch)) in BRANCHES.iter().zip(from.clutches()).enumerate() {
-            let rel = links.get(*lever).map_or_else(T::zero, |l| l.omega) - shaft;
-            contact[k] = clutch != Clutch::Free
-                || (rel.abs() <= tol_w)
-                || kind == EventKind::Catch(*lever as u8);
-        }
-        let held_possible =
-            !from.shaft_turning() || kind == EventKind::ShaftStop || shaft.abs() <= tol_w;
-        let mut cands: heapless::Vec<(u8, Mode), 8> = heapless::Vec::new();
-        for turning in [false, true] {
-            if !turning && !held_possible {
-                continue;
-            }
-            let hold = if turning {
-                Clutch::Engaged
-            } else {
-                Clutch::Locked
-            };
-            let options = |k: usize| {
-                if contact[k] {
-                    [Clutch::Free, hold]
-                } else {
-                    [Clutch::Free, Clutch::Free]
-                }
-            };
-            for c6 in options(0) {
-                for c8 in options(1) {
-                    let Some(m) = Mode::from_clutches([c6, c8], turning) else {
-                        continue;
-                    };
-                    if !cands.iter().any(|(_, x)| *x == m) {
-                        let _ = cands.push((preference(from, m, kind), m));
-                    }
-                }
-            }
-        }
-        // Insertion sort by preference (stable: ties keep the enumeration order).
-        for i in 1..cands.len() {
-            for j in (1..=i).rev() {
-                match cands.get_mut(j - 1..=j) {
-                    Some([a, b]) if a.0 > b.0 => core::mem::swap(a, b),
-                    _ => break,
-                }
-            }
-        }
-        // Generalized momentum space of the unconstrained diode: the 2-DOF model, plus the
-        // shaft when it has inertia.
+        let tol_w = speed_tol::<T>() * speed_scale(&links);
+        let cands = candidate_modes(from, kind, &links, shaft, tol_w);
+        let space = self.momentum_space(w, &pose, &links, shaft, inputs)?;
+        let judge = Judge {
+            kind,
+            from,
+            pose: &pose,
+            space: &space,
+            inputs,
+            tol_w,
+        };
+        let pick = self.pick(w, &cands, &judge)?;
+        self.take_pick(w, kind, from, &links, pick, inputs)
+    }
+
+    /// The generalized momentum space of the unconstrained diode at `w`'s state: I0 (the
+    /// 2-DOF model, plus the shaft when it has inertia) built in the reference slot at
+    /// `pose` and evaluated at the links' speeds `links` and the shaft's `shaft`.
+    fn momentum_space(
+        &mut self,
+        w: &Work<T>,
+        pose: &[T; 9],
+        links: &[LinkState<T>; 9],
+        shaft: T,
+        inputs: &Inputs<T>,
+    ) -> Result<MomentumSpace<T>, TwinStepError> {
         let qr = best_slot(
             &self.params,
             Mode::I0,
-            &pose,
-            time,
+            pose,
+            w.t.to_f64(),
             self.settings.switch_below,
             &mut self.reference,
             self.slots.spares().1,
@@ -120,7 +93,7 @@ impl<T: Real> Twin<T> {
             yr[QD + k] = links.get(p).map_or_else(T::zero, |l| l.omega);
         }
         self.reference
-            .eval(w.t, &yr, inputs, d)
+            .eval(w.t, &yr, inputs, self.drive)
             .map_err(|e| self.physical_error(e))?;
         let js = self.params.shaft_inertia;
         let with_shaft = js > T::zero();
@@ -138,19 +111,45 @@ impl<T: Real> Twin<T> {
             yr[QD + 1],
             if with_shaft { shaft } else { T::zero() },
         );
+        Ok(MomentumSpace {
+            mass,
+            u,
+            with_shaft,
+            yr,
+        })
+    }
+
+    /// Mode `m`'s constraint rows in the reference's momentum space and the speeds
+    /// projected onto them (with the impact's loss, J); `None` if they are
+    /// rank-deficient.
+    fn projected(&self, m: Mode, space: &MomentumSpace<T>) -> Projected<T> {
+        let rows = constraint_rows(m, space.with_shaft, |lever| self.reference.lever_row(lever));
+        let projection = project(&space.mass, &space.u, &rows);
+        (rows, projection)
+    }
+
+    /// Judges the candidates `cands` in order and returns the first consistent one,
+    /// built and evaluated; if none is, the least violating one (every candidate's
+    /// violation then the built model's, see [`Twin::rejudge`]), built again.
+    fn pick(
+        &mut self,
+        w: &Work<T>,
+        cands: &[(u8, Mode)],
+        judge: &Judge<'_, T>,
+    ) -> Result<Pick<T>, TwinStepError> {
         let mut best: Option<(T, Mode)> = None;
-        let mut chosen = None;
         // The state the reference's workspace was last evaluated at.
-        let mut yr_at = yr;
+        let mut yr_at = judge.space.yr;
         // Candidates the screen found clearly inconsistent, not built.
         let mut screened_out = false;
         self.candidates.clear();
         for (_, m) in cands.iter().copied() {
-            let rows = constraint_rows(m, with_shaft, |lever| self.reference.lever_row(lever));
-            let Some((u_plus, loss)) = project(&mass, &u, &rows) else {
+            let (rows, projection) = self.projected(m, judge.space);
+            let Some((u_plus, loss)) = projection else {
                 let _ = self.candidates.push((m, T::c(f64::INFINITY)));
                 continue; // rank-deficient constraints
             };
+            let (from, inputs, tol_w) = (judge.from, judge.inputs, judge.tol_w);
             let cand = match self.screen(m, from, &mut yr_at, &u_plus, w.t, inputs, tol_w) {
                 Some((v, _)) if v > screen_margin::<T>() => {
                     screened_out = true;
@@ -158,64 +157,103 @@ impl<T: Real> Twin<T> {
                 }
                 screened => {
                     let c = screened.map(|(_, c)| c);
-                    self.try_candidate(w, m, &pose, &u_plus, from, inputs, tol_w, c)?
+                    let pose = judge.pose;
+                    self.try_candidate(w, m, pose, &u_plus, from, inputs, tol_w, c)?
                 }
             };
-            let violation = cand.violation;
-            let _ = self.candidates.push((m, violation));
-            if violation <= T::zero() {
-                chosen = Some((m, loss, rows_mismatch(&rows, &u), cand, true));
-                break;
+            let _ = self.candidates.push((m, cand.violation));
+            if cand.violation <= T::zero() {
+                return Ok(Pick {
+                    mode: m,
+                    loss,
+                    mismatch: rows_mismatch(&rows, &judge.space.u),
+                    cand,
+                    consistent: true,
+                });
             }
-            if best.as_ref().is_none_or(|(v, _)| violation < *v) {
-                best = Some((violation, m));
-            }
-        }
-        if chosen.is_none() && screened_out {
-            // No candidate is consistent: the least violating one is taken, so every
-            // candidate's violation is the built model's, as when none is screened.
-            best = None;
-            for i in 0..self.candidates.len() {
-                let Some(&(m, mut v)) = self.candidates.get(i) else {
-                    break;
-                };
-                if v.finite() {
-                    let rows =
-                        constraint_rows(m, with_shaft, |lever| self.reference.lever_row(lever));
-                    if let Some((u_plus, _)) = project(&mass, &u, &rows) {
-                        v = self
-                            .try_candidate(w, m, &pose, &u_plus, from, inputs, tol_w, None)?
-                            .violation;
-                    }
-                }
-                if let Some(c) = self.candidates.get_mut(i) {
-                    c.1 = v;
-                }
-                if best.as_ref().is_none_or(|(b, _)| v < *b) {
-                    best = Some((v, m));
-                }
+            if best.as_ref().is_none_or(|(v, _)| cand.violation < *v) {
+                best = Some((cand.violation, m));
             }
         }
-        let (m, loss, mismatch, cand, consistent) = match chosen {
-            Some(x) => x,
-            None => {
-                let Some((v, m)) = best else {
-                    return Err(TwinStepError::Mechanism {
-                        time,
-                        mode: from,
-                        failures: heapless::Vec::new(),
-                    });
-                };
-                crate::trace::warn!(
-                    "t = {time:.6} s: no mode is consistent after {}; taking {m} (violation {v:?})",
-                    kind.name()
-                );
-                let rows = constraint_rows(m, with_shaft, |lever| self.reference.lever_row(lever));
-                let (u_plus, loss) = project(&mass, &u, &rows).unwrap_or((u, T::zero()));
-                let cand = self.try_candidate(w, m, &pose, &u_plus, from, inputs, tol_w, None)?;
-                (m, loss, rows_mismatch(&rows, &u), cand, false)
-            }
+        if screened_out {
+            best = self.rejudge(w, judge)?;
+        }
+        let Some((v, m)) = best else {
+            return Err(TwinStepError::Mechanism {
+                time: w.t.to_f64(),
+                mode: judge.from,
+                failures: heapless::Vec::new(),
+            });
         };
+        crate::trace::warn!(
+            "t = {:.6} s: no mode is consistent after {}; taking {m} (violation {v:?})",
+            w.t.to_f64(),
+            judge.kind.name()
+        );
+        let (rows, projection) = self.projected(m, judge.space);
+        let (u_plus, loss) = projection.unwrap_or((judge.space.u, T::zero()));
+        let (from, pose, inputs, tol_w) = (judge.from, judge.pose, judge.inputs, judge.tol_w);
+        let cand = self.try_candidate(w, m, pose, &u_plus, from, inputs, tol_w, None)?;
+        Ok(Pick {
+            mode: m,
+            loss,
+            mismatch: rows_mismatch(&rows, &judge.space.u),
+            cand,
+            consistent: false,
+        })
+    }
+
+    /// No candidate is consistent and the screen judged some: each candidate that can
+    /// be built is judged by its built model, so that the least violating one is
+    /// taken as when none is screened; returns it with its violation.
+    fn rejudge(
+        &mut self,
+        w: &Work<T>,
+        judge: &Judge<'_, T>,
+    ) -> Result<Option<(T, Mode)>, TwinStepError> {
+        let mut best: Option<(T, Mode)> = None;
+        let (from, pose, inputs, tol_w) = (judge.from, judge.pose, judge.inputs, judge.tol_w);
+        for i in 0..self.candidates.len() {
+            let Some(&(m, mut v)) = self.candidates.get(i) else {
+                break;
+            };
+            if v.finite() {
+                if let (_, Some((u_plus, _))) = self.projected(m, judge.space) {
+                    v = self
+                        .try_candidate(w, m, pose, &u_plus, from, inputs, tol_w, None)?
+                        .violation;
+                }
+            }
+            if let Some(c) = self.candidates.get_mut(i) {
+                c.1 = v;
+            }
+            if best.as_ref().is_none_or(|(b, _)| v < *b) {
+                best = Some((v, m));
+            }
+        }
+        Ok(best)
+    }
+
+    /// Takes the mode `pick` (its candidate slot holds it, evaluated) at `w`: the state
+    /// read back from it, the impact's loss booked, and the event logged.
+    fn take_pick(
+        &mut self,
+        w: &mut Work<T>,
+        kind: EventKind,
+        from: Mode,
+        links: &[LinkState<T>; 9],
+        pick: Pick<T>,
+        inputs: &Inputs<T>,
+    ) -> Result<(), TwinStepError> {
+        let time = w.t.to_f64();
+        let Pick {
+            mode: m,
+            loss,
+            mismatch,
+            cand,
+            consistent,
+        } = pick;
+        let with_shaft = self.params.shaft_inertia > T::zero();
         if m.shaft_turning() && with_shaft && m.clutches().iter().all(|c| *c == Clutch::Free) {
             return Err(TwinStepError::Coasting { time });
         }
@@ -249,7 +287,7 @@ impl<T: Real> Twin<T> {
             self.restart_at(w, inputs)?;
         }
         let after = self.slots.cur().links(&self.params);
-        let position_gap = joint_gap(&self.params, &links, &after);
+        let position_gap = joint_gap(&self.params, links, &after);
         crate::trace::info!(
             "t = {time:.6} s: {} -> {m} ({}, {} coordinates, impact loss {loss:?} J)",
             from,
@@ -289,4 +327,111 @@ impl<T: Real> Twin<T> {
         }
         y
     }
+}
+
+/// The candidate modes at event `kind` from mode `from`, with their [`preference`],
+/// most preferred first (ties in the enumeration order): each lever that touches the
+/// shaft (its speed `shaft`, to `tol_w`), holds, or is caught, free or holding; the
+/// shaft held, if it may be, or turning.
+fn candidate_modes<T: Real>(
+    from: Mode,
+    kind: EventKind,
+    links: &[LinkState<T>; 9],
+    shaft: T,
+    tol_w: T,
+) -> heapless::Vec<(u8, Mode), 8> {
+    // Which levers touch the shaft (may lock or engage), and the shaft's options.
+    let mut contact = [false; 2];
+    for (k, ((_, lever), clutch)) in BRANCHES.iter().zip(from.clutches()).enumerate() {
+        let rel = links.get(*lever).map_or_else(T::zero, |l| l.omega) - shaft;
+        contact[k] = clutch != Clutch::Free
+            || (rel.abs() <= tol_w)
+            || kind == EventKind::Catch(*lever as u8);
+    }
+    let held_possible =
+        !from.shaft_turning() || kind == EventKind::ShaftStop || shaft.abs() <= tol_w;
+    let mut cands: heapless::Vec<(u8, Mode), 8> = heapless::Vec::new();
+    for turning in [false, true] {
+        if !turning && !held_possible {
+            continue;
+        }
+        let hold = if turning {
+            Clutch::Engaged
+        } else {
+            Clutch::Locked
+        };
+        let options = |k: usize| {
+            if contact[k] {
+                [Clutch::Free, hold]
+            } else {
+                [Clutch::Free, Clutch::Free]
+            }
+        };
+        for c6 in options(0) {
+            for c8 in options(1) {
+                let Some(m) = Mode::from_clutches([c6, c8], turning) else {
+                    continue;
+                };
+                if !cands.iter().any(|(_, x)| *x == m) {
+                    let _ = cands.push((preference(from, m, kind), m));
+                }
+            }
+        }
+    }
+    // Insertion sort by preference (stable: ties keep the enumeration order).
+    for i in 1..cands.len() {
+        for j in (1..=i).rev() {
+            match cands.get_mut(j - 1..=j) {
+                Some([a, b]) if a.0 > b.0 => core::mem::swap(a, b),
+                _ => break,
+            }
+        }
+    }
+    cands
+}
+
+/// The reference model's (I0's) generalized momentum space at an event.
+struct MomentumSpace<T: Real> {
+    /// Its mass matrix over `(q̇₁, q̇₂, ω_shaft)` (the shaft's entry 1 without inertia).
+    mass: SMatrix<T, 3, 3>,
+    /// The speeds before the event over the same coordinates.
+    u: SVector<T, 3>,
+    /// Whether the shaft has inertia (a third coordinate).
+    with_shaft: bool,
+    /// The state the reference was evaluated at.
+    yr: SVector<T, STATE>,
+}
+
+/// A mode's constraint rows and, unless they are rank-deficient, the speeds projected
+/// onto them and the impact's loss, J.
+type Projected<T> = (heapless::Vec<SVector<T, 3>, 3>, Option<(SVector<T, 3>, T)>);
+
+/// What every candidate of one mode choice is judged at.
+struct Judge<'a, T: Real> {
+    /// The event.
+    kind: EventKind,
+    /// The mode before the event.
+    from: Mode,
+    /// The physical angles, rad.
+    pose: &'a [T; 9],
+    /// The reference's momentum space.
+    space: &'a MomentumSpace<T>,
+    /// The step's inputs.
+    inputs: &'a Inputs<T>,
+    /// The speed tolerance, rad/s.
+    tol_w: T,
+}
+
+/// The mode a choice takes.
+struct Pick<T: Real> {
+    /// The mode.
+    mode: Mode,
+    /// Kinetic energy lost in the impact, J.
+    loss: T,
+    /// How far the speeds before the event violate its constraints.
+    mismatch: T,
+    /// It, built and judged.
+    cand: Candidate<T>,
+    /// Whether it is consistent (else the least violating).
+    consistent: bool,
 }
