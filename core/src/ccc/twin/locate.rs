@@ -175,52 +175,26 @@ impl<T: Real> Twin<T> {
         fired: Fired,
         inputs: &Inputs<T>,
     ) -> Result<(T, EventKind, bool), TwinStepError> {
-        // The largest of the fired functions (the first of equals) and its value.
-        let pick = |g: &Guards<T>| -> (T, Guard) {
-            let mut best = (T::c(f64::NEG_INFINITY), Guard::Catch6);
-            for (k, v) in g.watched() {
-                if fired.contains(k) && v > best.0 {
-                    best = (v, k);
-                }
-            }
-            best
-        };
         // The caller evaluates the state at the event in full after this.
         let speeds_only = fired.speeds_only();
-        let (mut lo, mut hi) = (T::zero(), T::one());
-        let (mut glo, _) = pick(g0);
-        let (mut ghi, mut which) = pick(&self.guards);
-        let mut side = 0i8;
-        let mut y = SVector::<T, STATE>::zeros();
         // THETA_TOL, or 8 ulps of the step's fraction if that is larger (f32: 9.5e-7),
         // so that the margin below moves the point by a few ulps at least.
         let tol = T::c(THETA_TOL).max(T::EPS * T::c(8.0));
-        let first = fired.first();
-        let single = fired.single();
-        let before = self
-            .last_guards
-            .zip(first)
-            .and_then(|((g, hp), k)| g.get(k).map(|v| (v, hp / h)));
         // Two points this close to each other bracket... or not, but their secant
         // places the crossing to about near²·|g''/g'| (θ units), 1e-10 in f64 for a
         // curvature |g''/g'| of 1 per step: far below `tol`.
         let near = (tol * T::c(0.01)).sqrt();
-        let guess = single.and_then(|k| {
-            match (
-                g0.get(k),
-                self.guards.get(k),
-                r0.get(k),
-                self.guard_rates.get(k),
-            ) {
-                (Some(a), Some(b), Some(ra), Some(rb)) if speeds_only => {
-                    hermite_root(a, b, ra * h, rb * h, before, tol)
-                }
-                (Some(a), Some(b), _, _) if !speeds_only => {
-                    before.and_then(|(gm, r)| quadratic_root(gm, r, a, b, tol))
-                }
-                _ => None,
-            }
-        });
+        let (glo, _) = largest_fired(g0, fired);
+        let (ghi, which) = largest_fired(&self.guards, fired);
+        let mut b = Bracket {
+            lo: T::zero(),
+            hi: T::one(),
+            glo,
+            ghi,
+            side: 0,
+            which,
+        };
+        let guess = self.first_guess((g0, r0), fired, h, tol);
         let mut at_hi = false;
         let mut used = 0;
         // The last evaluated point (θ, its event function, not Illinois-scaled), and
@@ -245,22 +219,10 @@ impl<T: Real> Twin<T> {
             }
         });
         for _ in 0..MAX_LOCATE_ITER {
-            if hi - lo <= tol {
+            if b.hi - b.lo <= tol {
                 break;
             }
             used += 1;
-            // Regula falsi's point, kept at least 0.4 of the tolerance inside the
-            // bracket: once the crossing is that close to an end, the next point lands
-            // past it and closes the bracket. (Bisecting whenever the point fell within
-            // 1% of the bracket of an end, as before, turned the iteration into
-            // bisection near convergence: every event of S2 took the 16 evaluations and
-            // was located to about 1e-5 of the step, not to the tolerance.)
-            // A function exactly 0 at `lo` (f32: the shaft's speed rounds to 0.0 over a
-            // stretch of 5e-6 of the step around its stop) puts regula falsi's point on
-            // `lo` for good: the margin crept up 0.4 tol per evaluation, the bracket
-            // never closed and the event was placed at the step's end, past the lever's
-            // reversal (S2 in f32 chose I0 instead of I8 at 0.3073 s). Bisect then.
-            //
             // Near the crossing, a sharper estimate aims just past it (see `near`):
             // from the first evaluated point, a Newton step on the interpolant's slope;
             // from two, their secant.
@@ -270,35 +232,9 @@ impl<T: Real> Twin<T> {
                 (None, Some((tp, gp))) => slope.take().map(|s| tp - gp / s + margin),
                 (None, None) => None,
             };
-            let th = match aimed {
-                Some(th) if th.finite() => th.max(lo + margin).min(hi - margin),
-                _ if glo != T::zero() => {
-                    let rf = (lo * ghi - hi * glo) / (ghi - glo);
-                    if rf.finite() {
-                        rf.max(lo + margin).min(hi - margin)
-                    } else {
-                        (lo + hi) * T::c(0.5)
-                    }
-                }
-                _ => (lo + hi) * T::c(0.5),
-            };
-            self.dp5.dense(th, &mut y);
-            w.t = t0 + th * h;
-            w.y = y;
-            if speeds_only {
-                self.slots
-                    .cur_mut()
-                    .eval_speeds(w.t, &w.y)
-                    .map_err(|e| self.physical_error(e))?;
-                let links = self.slots.cur().links(&self.params);
-                // The clutch torques are those of the last full evaluation: the
-                // torque functions are not read (none of them fired).
-                self.guards = self.guards_of(self.slots.cur(), &links, &self.c, inputs);
-            } else {
-                // A point of the bracket, not where the step goes on from: no seed.
-                self.evaluate_from(Stage::Motion, w, inputs, Torques::Kinetostatics)?;
-            }
-            let (g, k) = pick(&self.guards);
+            let th = b.point(aimed, margin);
+            self.eval_point(w, t0 + th * h, th, speeds_only, inputs)?;
+            let (g, k) = largest_fired(&self.guards, fired);
             at_hi = g > T::zero();
             // The secant of this point and the last one, if they are `near`: the
             // crossing to ~near² (the curvature term), far below `tol`. The first
@@ -315,28 +251,8 @@ impl<T: Real> Twin<T> {
             }
             .filter(|r| r.finite());
             last = Some((th, g));
-            if at_hi {
-                hi = th;
-                ghi = g;
-                which = k;
-                if side == 1 {
-                    glo *= T::c(0.5);
-                }
-                side = 1;
-                // Past the crossing by at most the tolerance: located, though no
-                // point on the other side is that close (`lo` becomes the secant's
-                // crossing, for the log below).
-                if let Some(r) = crossing.filter(|r| th - *r <= tol && *r >= lo) {
-                    lo = r;
-                    break;
-                }
-            } else {
-                lo = th;
-                glo = g;
-                if side == -1 {
-                    ghi *= T::c(0.5);
-                }
-                side = -1;
+            if b.update(th, g, k, crossing, tol) {
+                break;
             }
             // Next: aim just past the secant's crossing.
             if let Some(r) = crossing {
@@ -346,9 +262,153 @@ impl<T: Real> Twin<T> {
         crate::trace::debug!(
             "event functions {:#08b}: located to {:?} of the step in {used} evaluations",
             fired.bits(),
-            hi - lo
+            b.hi - b.lo
         );
-        Ok((hi, which.event(), at_hi))
+        Ok((b.hi, b.which.event(), at_hi))
+    }
+
+    /// Where the iteration starts: a single fired function's interpolant's root over
+    /// the step and its slope there (see [`Twin::locate`]), if there is one.
+    fn first_guess(
+        &self,
+        (g0, r0): (&Guards<T>, &Guards<T>),
+        fired: Fired,
+        h: T,
+        tol: T,
+    ) -> Option<(T, T)> {
+        let speeds_only = fired.speeds_only();
+        let before = self
+            .last_guards
+            .zip(fired.first())
+            .and_then(|((g, hp), k)| g.get(k).map(|v| (v, hp / h)));
+        fired.single().and_then(|k| {
+            match (
+                g0.get(k),
+                self.guards.get(k),
+                r0.get(k),
+                self.guard_rates.get(k),
+            ) {
+                (Some(a), Some(b), Some(ra), Some(rb)) if speeds_only => {
+                    hermite_root(a, b, ra * h, rb * h, before, tol)
+                }
+                (Some(a), Some(b), _, _) if !speeds_only => {
+                    before.and_then(|(gm, r)| quadratic_root(gm, r, a, b, tol))
+                }
+                _ => None,
+            }
+        })
+    }
+
+    /// The event functions at the point `th` of the DP5 step (time `t`) on its dense
+    /// output, moved into `w`: speed functions from the speeds alone (`speeds_only`;
+    /// the clutch torques are those of the last full evaluation, the torque functions
+    /// are not read, none of them fired), else from a full evaluation. A point of the
+    /// bracket, not where the step goes on from: no seed.
+    fn eval_point(
+        &mut self,
+        w: &mut Work<T>,
+        t: T,
+        th: T,
+        speeds_only: bool,
+        inputs: &Inputs<T>,
+    ) -> Result<(), TwinStepError> {
+        let mut y = SVector::<T, STATE>::zeros();
+        self.dp5.dense(th, &mut y);
+        w.t = t;
+        w.y = y;
+        if speeds_only {
+            self.slots
+                .cur_mut()
+                .eval_speeds(w.t, &w.y)
+                .map_err(|e| self.physical_error(e))?;
+            let links = self.slots.cur().links(&self.params);
+            self.guards = self.guards_of(self.slots.cur(), &links, &self.c, inputs);
+        } else {
+            self.evaluate_from(Stage::Motion, w, inputs, Torques::Kinetostatics)?;
+        }
+        Ok(())
+    }
+}
+
+/// The largest of the fired functions in `g` (the first of equals) and its value.
+fn largest_fired<T: Real>(g: &Guards<T>, fired: Fired) -> (T, Guard) {
+    let mut best = (T::c(f64::NEG_INFINITY), Guard::Catch6);
+    for (k, v) in g.watched() {
+        if fired.contains(k) && v > best.0 {
+            best = (v, k);
+        }
+    }
+    best
+}
+
+/// The bracket of an event's crossing in the step's fraction θ, Illinois-scaled.
+struct Bracket<T> {
+    /// Its ends, θ.
+    lo: T,
+    hi: T,
+    /// The event function at them (scaled by Illinois' halving).
+    glo: T,
+    ghi: T,
+    /// The side the last point fell on (-1: before the crossing, 1: past it).
+    side: i8,
+    /// The function past the crossing at `hi`.
+    which: Guard,
+}
+
+impl<T: Real> Bracket<T> {
+    /// The next point: `aimed` if there is one, else regula falsi's, kept at least
+    /// `margin` (0.4 of the tolerance) inside the bracket: once the crossing is that
+    /// close to an end, the next point lands past it and closes the bracket.
+    /// (Bisecting whenever the point fell within 1% of the bracket of an end turned
+    /// the iteration into bisection near convergence: every event of S2 took the 16
+    /// evaluations and was located to about 1e-5 of the step, not to the tolerance.)
+    /// A function exactly 0 at `lo` (f32: the shaft's speed rounds to 0.0 over a
+    /// stretch of 5e-6 of the step around its stop) puts regula falsi's point on `lo`
+    /// for good: the margin crept up 0.4 tol per evaluation, the bracket never closed
+    /// and the event was placed at the step's end, past the lever's reversal (S2 in
+    /// f32 chose I0 instead of I8 at 0.3073 s). Bisect then.
+    fn point(&self, aimed: Option<T>, margin: T) -> T {
+        let (lo, hi, glo, ghi) = (self.lo, self.hi, self.glo, self.ghi);
+        match aimed {
+            Some(th) if th.finite() => th.max(lo + margin).min(hi - margin),
+            _ if glo != T::zero() => {
+                let rf = (lo * ghi - hi * glo) / (ghi - glo);
+                if rf.finite() {
+                    rf.max(lo + margin).min(hi - margin)
+                } else {
+                    (lo + hi) * T::c(0.5)
+                }
+            }
+            _ => (lo + hi) * T::c(0.5),
+        }
+    }
+
+    /// Takes the point `th` with its event function `g` (the largest fired, `k`) into
+    /// the bracket; returns whether the crossing is located: `th` is past it by at most
+    /// `tol` of the estimate `crossing`, though no point on the other side is that
+    /// close (`lo` becomes the estimate, for the log).
+    fn update(&mut self, th: T, g: T, k: Guard, crossing: Option<T>, tol: T) -> bool {
+        if g > T::zero() {
+            self.hi = th;
+            self.ghi = g;
+            self.which = k;
+            if self.side == 1 {
+                self.glo *= T::c(0.5);
+            }
+            self.side = 1;
+            if let Some(r) = crossing.filter(|r| th - *r <= tol && *r >= self.lo) {
+                self.lo = r;
+                return true;
+            }
+        } else {
+            self.lo = th;
+            self.glo = g;
+            if self.side == -1 {
+                self.ghi *= T::c(0.5);
+            }
+            self.side = -1;
+        }
+        false
     }
 }
 
