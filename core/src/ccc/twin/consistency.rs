@@ -133,6 +133,34 @@ impl<T: Real> Twin<T> {
                 return None;
             }
         }
+        let x = self.reference_kkt(m, inputs)?;
+        let r = &self.reference;
+        let row = |lever: usize| r.lever_row(lever);
+        // The multipliers in the order of `constraint_rows`: one per locked or engaged
+        // lever, in branch order.
+        let mut c = [T::zero(); 2];
+        let mut i = 3;
+        for (ck, clutch) in c.iter_mut().zip(m.clutches()) {
+            if clutch != Clutch::Free {
+                *ck = d * x.get(i).copied().unwrap_or(T::zero());
+                i += 1;
+            }
+        }
+        let mut links = [LinkState::default(); 9];
+        for (p, l) in links.iter_mut().enumerate().skip(1) {
+            let v = row(p);
+            l.omega = v[0] * u_plus[0] + v[1] * u_plus[1];
+            l.alpha = v[0] * x[0] + v[1] * x[1] + r.alpha_bias(p);
+        }
+        Some((self.violation(m, from, &c, &links, inputs, tol_w), c))
+    }
+
+    /// The reference's KKT system with mode `m`'s clutches as constraints on the
+    /// accelerations (see [`Twin::screen`]), solved: `q̈` (with the shaft's) and the
+    /// multipliers, in the order of `constraint_rows`; `None` if it is singular or its
+    /// solution not finite.
+    fn reference_kkt(&self, m: Mode, inputs: &Inputs<T>) -> Option<SVector<T, 6>> {
+        let d = self.drive;
         let r = &self.reference;
         let row = |lever: usize| r.lever_row(lever);
         let rows = constraint_rows(m, true, row);
@@ -171,26 +199,7 @@ impl<T: Real> Twin<T> {
             }
         }
         let x = crate::linalg::solve(kkt, rhs)?;
-        if x.iter().any(|v| !v.finite()) {
-            return None;
-        }
-        // The multipliers in the order of `constraint_rows`: one per locked or engaged
-        // lever, in branch order.
-        let mut c = [T::zero(); 2];
-        let mut i = 3;
-        for (ck, clutch) in c.iter_mut().zip(m.clutches()) {
-            if clutch != Clutch::Free {
-                *ck = d * x.get(i).copied().unwrap_or(T::zero());
-                i += 1;
-            }
-        }
-        let mut links = [LinkState::default(); 9];
-        for (p, l) in links.iter_mut().enumerate().skip(1) {
-            let v = row(p);
-            l.omega = v[0] * u_plus[0] + v[1] * u_plus[1];
-            l.alpha = v[0] * x[0] + v[1] * x[1] + r.alpha_bias(p);
-        }
-        Some((self.violation(m, from, &c, &links, inputs, tol_w), c))
+        x.iter().all(|v| v.finite()).then_some(x)
     }
 }
 

@@ -140,17 +140,58 @@ impl<T: Real> Twin<T> {
         inputs: &Inputs<T>,
         failed: Option<StepError>,
     ) -> Result<(), TwinStepError> {
+        let links = self.slots.cur().links(&self.params);
+        let now = self.slots.cur().conditioning();
+        let Some((cond, coords, q)) = self.best_other_choice(w, failed)? else {
+            // No other choice assembles here: the current one still drives.
+            return Ok(());
+        };
+        if !(failed.is_some() || cond > now * T::c(1.5)) {
+            return Ok(());
+        }
+        let from = self.slots.cur().coords;
+        self.take_candidate(w);
+        let omega: [T; 9] = core::array::from_fn(|p| links[p].omega);
+        load_state(self.slots.cur(), &q, &omega, &mut w.y);
+        self.dp5.invalidate();
+        self.restart_at(w, inputs)?;
+        let after = self.slots.cur().links(&self.params);
+        let position_gap = joint_gap(&self.params, &links, &after);
+        let speed_gap = (1..9).fold(T::zero(), |e, p| {
+            e.max((after[p].omega - links[p].omega).abs())
+        });
+        let (time, mode) = (w.t.to_f64(), self.slots.cur().mode);
+        crate::trace::info!("t = {time:.6} s: mode {mode}: coordinates {from} -> {coords} (conditioning {now:?} -> {cond:?})");
+        let _ = self.switches.push(CoordinateSwitch {
+            time: w.t,
+            mode,
+            from,
+            to: coords,
+            conditioning: [now, self.slots.cur().conditioning()],
+            position_gap,
+            speed_gap,
+        });
+        Ok(())
+    }
+
+    /// The best conditioned of the mode's other coordinate choices at `w`'s state
+    /// (its conditioning, the choice and its coordinates), built in the scratch slot;
+    /// `None` if no other assembles and the current one did not fail (`failed`), an
+    /// error naming every choice's failing group if it did.
+    fn best_other_choice(
+        &mut self,
+        w: &Work<T>,
+        failed: Option<StepError>,
+    ) -> Result<Option<(T, Coordinates, [T; 2])>, TwinStepError> {
         let time = w.t.to_f64();
         let mode = self.slots.cur().mode;
         let pose = self.slot_links_unwrapped();
-        let links = self.slots.cur().links(&self.params);
-        let now = self.slots.cur().conditioning();
         // (conditioning, choice, its coordinates) of the best other choice, which the
         // candidate slot holds.
         let mut best: Option<(T, Coordinates, [T; 2])> = None;
         // The current choice is not assembled again: it is at this very pose with
-        // conditioning `now`, so it could only win the scan by keeping its place, and
-        // another choice is taken only if it beats `now` by 1.5.
+        // its conditioning, so it could only win the scan by keeping its place, and
+        // another choice is taken only if it beats it by 1.5.
         let skip = Some(self.slots.cur().coords);
         // The reference slot is the spare: the mode choice builds it again.
         let (backup, cand) = self.slots.spares();
@@ -173,54 +214,26 @@ impl<T: Real> Twin<T> {
                 }
             },
         )?;
-        if failed.is_none() && best.is_none() {
-            // No other choice assembles here: the current one still drives.
-            return Ok(());
+        if best.is_some() || failed.is_none() {
+            return Ok(best);
         }
-        let Some((cond, coords, q)) = best else {
-            if let Some(StepError::Group { group, fault, .. }) =
-                failed.map(|e| physical(&self.slots.cur().map, e))
-            {
-                let _ = failures.insert(
-                    0,
-                    Failure {
-                        coords: self.slots.cur().coords,
-                        group,
-                        fault,
-                    },
-                );
-            }
-            return Err(TwinStepError::Mechanism {
-                time,
-                mode,
-                failures,
-            });
-        };
-        if !(failed.is_some() || cond > now * T::c(1.5)) {
-            return Ok(());
+        if let Some(StepError::Group { group, fault, .. }) =
+            failed.map(|e| physical(&self.slots.cur().map, e))
+        {
+            let _ = failures.insert(
+                0,
+                Failure {
+                    coords: self.slots.cur().coords,
+                    group,
+                    fault,
+                },
+            );
         }
-        let from = self.slots.cur().coords;
-        self.take_candidate(w);
-        let omega: [T; 9] = core::array::from_fn(|p| links[p].omega);
-        load_state(self.slots.cur(), &q, &omega, &mut w.y);
-        self.dp5.invalidate();
-        self.restart_at(w, inputs)?;
-        let after = self.slots.cur().links(&self.params);
-        let position_gap = joint_gap(&self.params, &links, &after);
-        let speed_gap = (1..9).fold(T::zero(), |e, p| {
-            e.max((after[p].omega - links[p].omega).abs())
-        });
-        crate::trace::info!("t = {time:.6} s: mode {mode}: coordinates {from} -> {coords} (conditioning {now:?} -> {cond:?})");
-        let _ = self.switches.push(CoordinateSwitch {
-            time: w.t,
+        Err(TwinStepError::Mechanism {
+            time,
             mode,
-            from,
-            to: coords,
-            conditioning: [now, self.slots.cur().conditioning()],
-            position_gap,
-            speed_gap,
-        });
-        Ok(())
+            failures,
+        })
     }
 }
 

@@ -259,48 +259,7 @@ impl fmt::Display for TwinStepError {
                 worst.group,
                 worst.fault
             ),
-            TwinStepError::Diode {
-                time,
-                mode,
-                reach,
-                sines,
-                stretched_reach,
-                in_line,
-                closing_in,
-            } => {
-                write!(
-                    f,
-                    "t = {time:.6} s: mode {mode}: a singularity of the mechanism: the diode's rods and levers in line, "
-                )?;
-                let mut first = true;
-                for (k, (rod, lever)) in BRANCHES.into_iter().enumerate() {
-                    let (Some(sine), Some(full), Some(true), Some(within)) = (
-                        sines.get(k),
-                        stretched_reach.get(k),
-                        in_line.get(k).copied(),
-                        closing_in.get(k),
-                    ) else {
-                        continue;
-                    };
-                    let sep = if first { "" } else { " and " };
-                    let how = if *reach > full * 0.5 {
-                        "stretched"
-                    } else {
-                        "folded"
-                    };
-                    write!(f, "{sep}RRR({rod},{lever}) {how} (|sin| {sine:.1e}")?;
-                    if *sine >= SINGULAR_CONDITIONING {
-                        write!(f, ", in line in {:.2} ms at its rate", within * 1e3)?;
-                    }
-                    f.write_str(")")?;
-                    first = false;
-                }
-                write!(
-                    f,
-                    ", |DH| = {reach:.7} m of rod + lever = {:.7} m: their constraints lose rank, no coordinate choice drives it",
-                    stretched_reach[0]
-                )
-            }
+            TwinStepError::Diode { .. } => self.fmt_diode(f),
             TwinStepError::Coasting { time } => write!(
                 f,
                 "t = {time:.6} s: the shaft would coast free of both levers (J_s > 0), which is not modelled"
@@ -312,6 +271,54 @@ impl fmt::Display for TwinStepError {
 impl core::error::Error for TwinStepError {}
 
 impl TwinStepError {
+    /// [`TwinStepError::Diode`]'s message: the branches in line and the reach.
+    fn fmt_diode(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let TwinStepError::Diode {
+            time,
+            mode,
+            reach,
+            sines,
+            stretched_reach,
+            in_line,
+            closing_in,
+        } = self
+        else {
+            return Ok(());
+        };
+        write!(
+            f,
+            "t = {time:.6} s: mode {mode}: a singularity of the mechanism: the diode's rods and levers in line, "
+        )?;
+        let mut first = true;
+        for (k, (rod, lever)) in BRANCHES.into_iter().enumerate() {
+            let (Some(sine), Some(full), Some(true), Some(within)) = (
+                sines.get(k),
+                stretched_reach.get(k),
+                in_line.get(k).copied(),
+                closing_in.get(k),
+            ) else {
+                continue;
+            };
+            let sep = if first { "" } else { " and " };
+            let how = if *reach > full * 0.5 {
+                "stretched"
+            } else {
+                "folded"
+            };
+            write!(f, "{sep}RRR({rod},{lever}) {how} (|sin| {sine:.1e}")?;
+            if *sine >= SINGULAR_CONDITIONING {
+                write!(f, ", in line in {:.2} ms at its rate", within * 1e3)?;
+            }
+            f.write_str(")")?;
+            first = false;
+        }
+        write!(
+            f,
+            ", |DH| = {reach:.7} m of rod + lever = {:.7} m: their constraints lose rank, no coordinate choice drives it",
+            stretched_reach[0]
+        )
+    }
+
     /// Whether the twin stopped at a singularity of the mechanism itself (SPEC 3: the
     /// end of S1), rather than at a bad input or a step too coarse.
     pub fn at_singularity(&self) -> bool {

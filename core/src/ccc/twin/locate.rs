@@ -236,20 +236,7 @@ impl<T: Real> Twin<T> {
             self.eval_point(w, t0 + th * h, th, speeds_only, inputs)?;
             let (g, k) = largest_fired(&self.guards, fired);
             at_hi = g > T::zero();
-            // The secant of this point and the last one, if they are `near`: the
-            // crossing to ~near² (the curvature term), far below `tol`. The first
-            // point, `near` the Hermite root, takes the interpolant's trusted slope
-            // instead: a Newton step from it places the crossing to ~(g/s)² |g''/g'|
-            // plus (g/s) times the slope's relative error (S2's second points landed
-            // on the crossing this step predicts to 1e-13 of the step).
-            let crossing = match (last, trusted) {
-                (Some((tp, gp)), _) => Some((tp, gp))
-                    .filter(|(tp, _)| (th - *tp).abs() <= near)
-                    .map(|(tp, gp)| th - g * (th - tp) / (g - gp)),
-                (None, Some(s)) => Some(th - g / s),
-                (None, None) => None,
-            }
-            .filter(|r| r.finite());
+            let crossing = crossing_estimate((th, g), last, trusted, near);
             last = Some((th, g));
             if b.update(th, g, k, crossing, tol) {
                 break;
@@ -328,6 +315,28 @@ impl<T: Real> Twin<T> {
         }
         Ok(())
     }
+}
+
+/// The crossing estimated from the point `(th, g)` (θ, its event function) and the
+/// point before, `last`: their secant, if they are `near`: the crossing to ~near² (the
+/// curvature term), far below the tolerance. The first point, `near` the Hermite root,
+/// takes the interpolant's `trusted` slope instead: a Newton step from it places the
+/// crossing to ~(g/s)² |g''/g'| plus (g/s) times the slope's relative error (S2's second
+/// points landed on the crossing this step predicts to 1e-13 of the step).
+fn crossing_estimate<T: Real>(
+    (th, g): (T, T),
+    last: Option<(T, T)>,
+    trusted: Option<T>,
+    near: T,
+) -> Option<T> {
+    match (last, trusted) {
+        (Some((tp, gp)), _) => Some((tp, gp))
+            .filter(|(tp, _)| (th - *tp).abs() <= near)
+            .map(|(tp, gp)| th - g * (th - tp) / (g - gp)),
+        (None, Some(s)) => Some(th - g / s),
+        (None, None) => None,
+    }
+    .filter(|r| r.finite())
 }
 
 /// The largest of the fired functions in `g` (the first of equals) and its value.
