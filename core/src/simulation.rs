@@ -93,6 +93,9 @@ pub struct Simulation<T: Real> {
     h: T,
     steps: u64,
     balance: Balance<T>,
+    /// The end time set by [`Simulation::end_at`]: the step that would pass it lands on
+    /// it.
+    end: Option<T>,
 }
 
 impl<T: Real> Simulation<T> {
@@ -129,6 +132,7 @@ impl<T: Real> Simulation<T> {
             h,
             steps: 0,
             balance,
+            end: None,
         })
     }
 
@@ -207,7 +211,7 @@ impl<T: Real> Simulation<T> {
         // The groups' unknowns with their cosines and sines (`GroupData::trig`): a
         // step taken back restores both, so its re-evaluation reproduces the state.
         let saved = self.ws.warm_start();
-        let t_next = T::c((self.steps + 1) as f64) * self.h;
+        let t_next = self.clamp_to_end(T::c((self.steps + 1) as f64) * self.h);
         if !t_next.finite() {
             return Err(wrap(StepError::NonFinite {
                 time: self.t.to_f64(),
@@ -250,6 +254,29 @@ impl<T: Real> Simulation<T> {
                 let _ = forward(&self.model, &mut self.ws, self.t, q, qd);
                 Err(e)
             }
+        }
+    }
+
+    /// Sets the run's end time `t_end` (s, in `(t, ∞)`): the step that would pass it is
+    /// shortened to land on it exactly (a run whose `t_end` is not a multiple of `h`
+    /// ends at `t_end`, not past it); the steps before keep `h`. Past `t_end` the steps
+    /// are `h` again. Errors: `t_end` is not finite or not after the current time.
+    pub fn end_at(&mut self, t_end: T) -> Result<(), SetupError> {
+        if !(t_end.finite() && t_end > self.t) {
+            return Err(SetupError::Setting(
+                "end time t_end must be finite and after the current time",
+            ));
+        }
+        self.end = Some(t_end);
+        Ok(())
+    }
+
+    /// The next step's end time `t_next`, or the end time of [`Simulation::end_at`] if
+    /// the step would pass it (and the state is still before it).
+    fn clamp_to_end(&self, t_next: T) -> T {
+        match self.end {
+            Some(e) if e < t_next && self.t < e => e,
+            _ => t_next,
         }
     }
 
