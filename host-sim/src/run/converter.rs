@@ -9,7 +9,9 @@
 //! (SPEC 3), reported in the summary. Any other failed step is exit code 1, after the
 //! rows and log lines before it are written and the summary is printed.
 
-use crate::error::{RunError, EXIT_FAILURE, EXIT_OK};
+use super::interrupt;
+use super::progress::Progress;
+use crate::error::{RunError, EXIT_FAILURE, EXIT_INTERRUPTED, EXIT_OK};
 use crate::model::runfile::MotorSpec;
 use crate::model::scenarios::CccScenario;
 use crate::options::{precision, RunOptions, Steps};
@@ -111,6 +113,9 @@ pub enum End {
         /// singularity): exit code 0, else 1.
         expected: bool,
     },
+    /// SIGINT or SIGTERM stopped it after `steps` steps (their rows and log lines
+    /// written): exit code 130.
+    Interrupted,
 }
 
 impl End {
@@ -174,6 +179,7 @@ impl CccSummary {
     pub fn exit_code(&self) -> u8 {
         match self.end {
             End::Completed | End::Stopped { expected: true, .. } => EXIT_OK,
+            End::Interrupted => EXIT_INTERRUPTED,
             End::Stopped {
                 expected: false, ..
             } => EXIT_FAILURE,
@@ -277,6 +283,11 @@ impl fmt::Display for CccSummary {
                 error,
                 expected: false,
             } => writeln!(f, "ended     step {} failed: {error}", self.steps + 1)?,
+            End::Interrupted => writeln!(
+                f,
+                "ended     interrupted (SIGINT or SIGTERM) after step {}: the files hold the run up to there",
+                self.steps
+            )?,
         }
         write!(
             f,
@@ -430,7 +441,13 @@ pub fn simulate<T: Real>(
     let mut written = 0u64;
     let mut steps = 0u64;
     let mut end = End::Completed;
+    let mut progress = Progress::new(t_end, opts.quiet);
     while steps < n {
+        if interrupt::requested() {
+            end = End::Interrupted;
+            break;
+        }
+        progress.tick(twin.time().to_f64());
         let t0 = Instant::now();
         let r = twin.step(&inputs);
         step_wall += t0.elapsed();
@@ -454,6 +471,7 @@ pub fn simulate<T: Real>(
         write(&twin, obs)?;
         rows += 1;
     }
+    progress.finish();
     obs.on_end()?;
     let wall = start.elapsed();
     let a = twin.audit();
