@@ -2,7 +2,7 @@
 //! Dormand-Prince integrator (SPEC 1, thesis 5.2). Each [`Simulation::step`] either
 //! advances the state or returns an error and keeps the last good state.
 
-use crate::balance::{audited_step, redo_in_substeps, Balance, LoadPoses};
+use crate::balance::{audited_step, metered_adaptive, redo_in_substeps, Balance, LoadPoses};
 use crate::config::{MAX_DOF, STATE_DIM};
 use crate::dynamics::{energy, finish_accelerations, forward, generalized_accelerations, Energy};
 use crate::error::{ModelError, StepError};
@@ -170,26 +170,34 @@ impl<T: Real> Simulation<T> {
     /// The simulation's own fixed-step integrator forgets its FSAL stage too: mixing
     /// `step` and `step_adaptive` is allowed, each starts from the state.
     ///
-    /// The interval's energy balance is not checked (the error control keeps it) and
-    /// its motor work is not metered: [`Balance::unaudited`] counts such intervals.
+    /// The interval's energy balance is not checked (the error control keeps it):
+    /// [`Balance::unaudited`] counts such intervals. Its work is metered as a fixed
+    /// step's is (the motors' with the state at the accepted steps' stages).
     pub fn step_adaptive(
         &mut self,
         adaptive: &mut Adaptive<T, STATE_DIM>,
     ) -> Result<AdaptiveStats, AdaptiveError<StepError>> {
         self.dp5.invalidate();
         let poses = LoadPoses::at(&self.model, &self.ws);
+        let first = self.balance.power();
         let r = self.advance(
             |sys, _, t, y, h| {
                 let t_end = *t + h;
-                adaptive.integrate_to(sys, t, y, t_end)
+                metered_adaptive(sys, adaptive, t, y, t_end, first)
             },
             AdaptiveError::System,
         );
         match r {
-            Ok(_) => self.balance.skip(&self.model, &self.ws, &poses, self.h),
-            Err(_) => adaptive.invalidate(),
+            Ok((stats, motor)) => {
+                self.balance
+                    .skip(&self.model, &self.ws, &poses, self.h, motor);
+                Ok(stats)
+            }
+            Err(e) => {
+                adaptive.invalidate();
+                Err(e)
+            }
         }
-        r
     }
 
     /// Takes the state from `t` to the next output time `(n+1)·h` by `integrate(system,

@@ -185,8 +185,9 @@ fn write(dir: &TempDir, name: &str, text: &str) -> String {
     p
 }
 
-/// The work of a `[[load]]` moment is in the balance with the adaptive integrator too.
-/// Oracle: a constant moment `M` on the driven crank does the work `M (q1(T) - q1(0))`.
+/// The work of a `[[load]]` moment is in the balance with the adaptive integrator too,
+/// and the motors' work is metered there. Oracle: a constant moment `M` on the driven
+/// crank does the work `M (q1(T) - q1(0))`, a constant motor torque `τ (q1(T) - q1(0))`.
 #[test]
 fn load_work_is_in_every_balance() {
     let dir = TempDir::new("figures-loads");
@@ -204,6 +205,17 @@ fn load_work_is_in_every_balance() {
     let loads = number_after(&summary, "+ loads ");
     // Printed to six decimals.
     assert!((loads - want).abs() < 1e-6, "{loads} vs {want}\n{summary}");
+    // The motors' work is metered with the state too, not the trapezoid on the output
+    // grid (which was 8e-2 J off here): a constant 2 N·m does 2 (q1(T) - q1(0)), and
+    // the balance closes to the adaptive tolerance.
+    let motors = number_after(&summary, "work of the motors ");
+    let exact = 2.0 * (q[q.len() - 1] - q[0]);
+    assert!(
+        (motors - exact).abs() < 1e-6,
+        "{motors} vs {exact}\n{summary}"
+    );
+    let residual = number_after(&summary, "end - start - work = ");
+    assert!(residual.abs() < 1e-6 * motors, "{residual}\n{summary}");
 }
 
 /// An asynchronous motor whose parabola gives a negative torque at standstill is

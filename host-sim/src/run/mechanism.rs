@@ -52,7 +52,8 @@ pub struct Metered {
     pub load_work: f64,
     /// Work in minus the change of K + V.
     pub residual: f64,
-    /// The worst step's balance relative to its energy scale.
+    /// The worst step's balance relative to its energy scale (fixed steps; the
+    /// adaptive integrator's intervals are not checked).
     pub worst: f64,
     /// Steps redone in sub-steps.
     pub redone: u64,
@@ -87,23 +88,15 @@ pub struct Summary {
     pub energy_start: (f64, f64),
     /// Kinetic and potential energy at the end, J.
     pub energy_end: (f64, f64),
-    /// Work of the drives, J (N·m·rad or N·m): the trapezoidal rule over the output
-    /// intervals of the power `Σ motor_torque · q̇`; printed only with the adaptive
-    /// integrator, whose intervals the core does not meter (`balance` is `None` then).
-    pub drive_work: f64,
-    /// Work of the constant loads, J: exact over every step (`F·Δr + M·Δθ`), with
-    /// either integrator.
-    pub load_work: f64,
     /// Whether SIGINT or SIGTERM stopped the run before `t_end` (after the row of its
     /// last state was written).
     pub interrupted: bool,
     /// The motors' warnings: a characteristic that rises again past a speed (set-up),
     /// a motor driven out of its working zone (the first time, with its numbers).
     pub warnings: Vec<String>,
-    /// The energy balance the core metered with the state, when every step was a
-    /// fixed DP5 step (`None` with the adaptive integrator, whose intervals are not
-    /// metered).
-    pub balance: Option<Metered>,
+    /// The energy balance the core metered with the state (with either integrator; the
+    /// worst step's is checked on the fixed steps only).
+    pub balance: Metered,
     /// Largest reaction force magnitude over every step (revolute `|F|`, prismatic `|N|`).
     pub max_reaction: Option<MaxReaction>,
     /// With `integrator = "adaptive"`: its steps accepted and rejected in all (`steps`
@@ -208,25 +201,23 @@ impl fmt::Display for Summary {
             Fig(v1),
             Fig(e1)
         )?;
-        match &self.balance {
-            Some(b) => writeln!(
-                f,
-                "balance   work of the motors {} J + loads {} J, end - start - work = {:.3e} J; \
-                 worst step {:.1e} of its energy scale, {} steps redone in {} sub-steps",
-                Fig(b.motor_work),
-                Fig(b.load_work),
-                -b.residual,
-                b.worst,
-                b.redone,
-                b.substeps
-            )?,
+        let b = &self.balance;
+        write!(
+            f,
+            "balance   work of the motors {} J + loads {} J, end - start - work = {:.3e} J",
+            Fig(b.motor_work),
+            Fig(b.load_work),
+            -b.residual
+        )?;
+        match self.adaptive {
             None => writeln!(
                 f,
-                "balance   work of the drives {} J (trapezoid on the output grid: adaptive intervals \
-                 are not metered) + loads {} J, end - start - work = {:.3e} J",
-                Fig(self.drive_work),
-                Fig(self.load_work),
-                e1 - e0 - self.drive_work - self.load_work
+                "; worst step {:.1e} of its energy scale, {} steps redone in {} sub-steps",
+                b.worst, b.redone, b.substeps
+            )?,
+            Some(_) => writeln!(
+                f,
+                " (adaptive steps: kept by the error control, not checked)"
             )?,
         }
         for w in &self.warnings {
@@ -317,18 +308,6 @@ pub fn simulate<T: Real>(
     let mut from: Option<(f64, f64)> = None;
     let first_averaged = n.div_ceil(2);
     let mut progress = Progress::new(t_end, opts.quiet);
-    let drive_power = |sim: &Simulation<T>| -> f64 {
-        let ws = sim.workspace();
-        let qd = sim.qd();
-        model
-            .drives()
-            .iter()
-            .zip(ws.motor.iter())
-            .map(|(d, tau)| tau.to_f64() * qd.get(d.coord as usize).map_or(0.0, |v| v.to_f64()))
-            .sum()
-    };
-    let (mut drive_work, mut power) = (0.0f64, drive_power(&sim));
-    let half_h = 0.5 * h.to_f64();
     obs.on_start(&Tables {
         columns: &layout.names,
         logs: &[],
@@ -391,9 +370,6 @@ pub fn simulate<T: Real>(
         }
         steps += 1;
         motors.check(&sim);
-        let p = drive_power(&sim);
-        drive_work += half_h * (power + p);
-        power = p;
     };
     let wall = start.elapsed();
     progress.finish();
@@ -446,11 +422,9 @@ pub fn simulate<T: Real>(
         mean_speed,
         energy_start,
         energy_end: (e1.kinetic.to_f64(), e1.potential.to_f64()),
-        drive_work,
-        load_work: sim.balance().load_work.to_f64(),
         interrupted,
         warnings: motors.warnings,
-        balance: (sim.balance().unaudited == 0).then(|| {
+        balance: {
             let b = sim.balance();
             Metered {
                 motor_work: b.motor_work.to_f64(),
@@ -460,7 +434,7 @@ pub fn simulate<T: Real>(
                 redone: b.redone,
                 substeps: b.substeps,
             }
-        }),
+        },
         max_reaction: max.map(|(k, value, time)| MaxReaction {
             joint: layout.names[k].clone(),
             value,
