@@ -11,7 +11,7 @@
 
 use super::interrupt;
 use super::progress::Progress;
-use crate::error::{RunError, EXIT_FAILURE, EXIT_INTERRUPTED, EXIT_OK};
+use crate::error::{Fig, RunError, EXIT_FAILURE, EXIT_INTERRUPTED, EXIT_OK};
 use crate::model::runfile::MotorSpec;
 use crate::model::scenarios::CccScenario;
 use crate::options::{precision, RunOptions, Steps};
@@ -221,8 +221,11 @@ impl fmt::Display for CccSummary {
         )?;
         writeln!(
             f,
-            "steps     {} of h = {} s, t = 0 .. {:.6} s, {} CSV rows",
-            self.steps, self.h, self.time, self.rows
+            "steps     {} of h = {} s, t = 0 .. {} s, {} CSV rows",
+            self.steps,
+            self.h,
+            Fig(self.time),
+            self.rows
         )?;
         match &self.logs {
             Some((e, s)) => writeln!(f, "logs      {e}, {s}")?,
@@ -232,7 +235,7 @@ impl fmt::Display for CccSummary {
             )?,
         }
         match self.first_breakaway {
-            Some((t, by)) => writeln!(f, "breakaway first at t = {t:.6} s ({by})")?,
+            Some((t, by)) => writeln!(f, "breakaway first at t = {} s ({by})", Fig(t))?,
             None => writeln!(f, "breakaway none")?,
         }
         write!(f, "events   ")?;
@@ -245,12 +248,12 @@ impl fmt::Display for CccSummary {
         let a = &self.audit;
         writeln!(
             f,
-            "energy    motor work {:.6} J, Δ(K + V) {:.6} J (K + V: {:.6} -> {:.6} J), load work {:.6} J, impact losses {:.3e} J",
-            a.motor_work,
-            a.kinetic + a.potential - a.initial,
-            a.initial,
-            a.kinetic + a.potential,
-            a.load_work,
+            "energy    motor work {} J, Δ(K + V) {} J (K + V: {} -> {} J), load work {} J, impact losses {:.3e} J",
+            Fig(a.motor_work),
+            Fig(a.kinetic + a.potential - a.initial),
+            Fig(a.initial),
+            Fig(a.kinetic + a.potential),
+            Fig(a.load_work),
             a.impact_loss
         )?;
         writeln!(
@@ -266,8 +269,11 @@ impl fmt::Display for CccSummary {
         )?;
         writeln!(
             f,
-            "final     mode {} ({} coordinates) at t = {:.6} s, shaft angle {:.6} rad",
-            self.mode, self.coords, self.time, self.shaft_angle
+            "final     mode {} ({} coordinates) at t = {} s, shaft angle {} rad",
+            self.mode,
+            self.coords,
+            Fig(self.time),
+            Fig(self.shaft_angle)
         )?;
         match &self.end {
             End::Completed => writeln!(f, "ended     reached t_end = {} s", self.t_end)?,
