@@ -246,8 +246,8 @@ impl fmt::Display for StepError {
 
 impl core::error::Error for StepError {}
 
-/// A time in a message, s: six decimals (`1.234000`), or with an exponent below 1e-3
-/// and from 1e9 on (`2.5e-8`), where six decimals would print `0.000000` or a long run
+/// A time in a message, s: six decimals (`1.234000`), or seven significant digits with
+/// an exponent below 1e-3 and from 1e9 on (`2.500000e-8`), where six decimals would print `0.000000` or a long run
 /// of digits.
 struct Time(f64);
 
@@ -257,7 +257,7 @@ impl fmt::Display for Time {
         if t == 0.0 || !t.is_finite() || (1e-3..1e9).contains(&t.abs()) {
             write!(f, "{t:.6}")
         } else {
-            write!(f, "{t:e}")
+            write!(f, "{t:.6e}")
         }
     }
 }

@@ -395,12 +395,9 @@ impl MotorSpec {
         (c > 0.0).then(|| {
             let w = -b / (2.0 * c);
             format!(
-                "the characteristic T(ω) = {} + {} ω + {} ω² N·m rises again past ω = {} rad/s \
-                 ({} rpm): driven past it, the motor gets more torque the faster it turns and \
-                 runs away",
-                Sci(self.quadratic().map_or(0.0, |q| q.0)),
-                Sci(b),
-                Sci(c),
+                "the characteristic {} rises again past ω = {} rad/s ({} rpm): driven past \
+                 it, the motor gets more torque the faster it turns and runs away",
+                characteristic(self.quadratic().map_or(0.0, |q| q.0), b, c),
                 Sci(w),
                 Sci(w * 60.0 / std::f64::consts::TAU)
             )
@@ -1164,6 +1161,12 @@ fn motor(ck: &Check<'_>, field: &str, v: &toml::Value) -> Result<MotorSpec, File
     })
 }
 
+/// `T(ω) = a + bω + cω²` for messages: `T(ω) = 12.6 - 2.61014 ω + 0.121585 ω² N·m`.
+fn characteristic(a: f64, b: f64, c: f64) -> String {
+    let term = |x: f64| format!("{} {}", if x < 0.0 { '-' } else { '+' }, Sci(x.abs()));
+    format!("T(ω) = {} {} ω {} ω² N·m", Sci(a), term(b), term(c))
+}
+
 /// A quadratic characteristic must give a torque `T(0) ≥ 0` at standstill: with
 /// `T(0) < 0` the motor cannot start; it turns backward, down the parabola's other
 /// branch, until its torque is no longer finite.
@@ -1172,11 +1175,9 @@ fn starts(ck: &Check<'_>, field: &str, m: MotorSpec) -> Result<MotorSpec, FileEr
         Some((a, b, c)) if a < 0.0 => Err(ck.err(
             field,
             format!(
-                "the characteristic T(ω) = {} + {} ω + {} ω² N·m gives T(0) = {} N·m < 0 at \
-                 standstill: the motor cannot start; check its speeds and torques",
-                Sci(a),
-                Sci(b),
-                Sci(c),
+                "the characteristic {} gives T(0) = {} N·m < 0 at standstill: the motor \
+                 cannot start; check its speeds and torques",
+                characteristic(a, b, c),
                 Sci(a)
             ),
         )),
