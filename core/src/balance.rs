@@ -212,7 +212,16 @@ impl<T: Real> OdeSystem<T, STATE_DIM> for Metered<'_, '_, T> {
     }
 }
 
-impl<T: Real> Metered<'_, '_, T> {
+impl<'s, 'a, T: Real> Metered<'s, 'a, T> {
+    /// The equations `eq`, metered from no evaluation.
+    fn new(eq: &'s mut Equations<'a, T>) -> Self {
+        Metered {
+            eq,
+            power: [T::zero(); Tableau::STAGES],
+            evals: 0,
+        }
+    }
+
     /// The motors' work over the DP5 step of size `h` just taken, whose first stage's
     /// power is `first` (W): `h Σ B5_i P_i`, J; and the power at its last stage (its end
     /// state).
@@ -240,11 +249,7 @@ pub(crate) fn metered_adaptive<T: Real>(
     t_end: T,
     first: T,
 ) -> Result<(AdaptiveStats, T), AdaptiveError<StepError>> {
-    let mut meter = Metered {
-        eq: sys,
-        power: [T::zero(); Tableau::STAGES],
-        evals: 0,
-    };
+    let mut meter = Metered::new(sys);
     let (mut motor, mut power) = (T::zero(), first);
     let stats = adaptive.integrate_to_with(&mut meter, t, y, t_end, |m, h, accepted| {
         if accepted {
@@ -274,11 +279,7 @@ pub(crate) fn audited_step<T: Real>(
 ) -> Result<Balance<T>, StepError> {
     let (t0, t_end) = (*t, *t + h);
     let n = substeps.max(1);
-    let mut meter = Metered {
-        eq: sys,
-        power: [T::zero(); Tableau::STAGES],
-        evals: 0,
-    };
+    let mut meter = Metered::new(sys);
     let (mut motor, mut load, mut power) = (T::zero(), T::zero(), start.power);
     for k in 1..=n {
         // `t0 + h·k/n` (k/n exact: n is a power of 2); the step `t_k - t` is exact
