@@ -25,7 +25,7 @@
 use crate::config::{MAX_LOADS, STATE_DIM};
 use crate::dynamics::energy;
 use crate::error::StepError;
-use crate::integrator::{Dp5, OdeSystem, Tableau};
+use crate::integrator::{Adaptive, AdaptiveError, AdaptiveStats, Dp5, OdeSystem, Tableau};
 use crate::model::Model;
 use crate::scalar::{rotate_cs, Real, Vec2};
 use crate::simulation::Equations;
@@ -70,8 +70,8 @@ pub struct Balance<T> {
     /// DP5 sub-steps of the redone steps, in all.
     pub substeps: u64,
     /// Intervals of [`Simulation::step_adaptive`](crate::Simulation::step_adaptive),
-    /// whose motor work is not metered: while it is not 0, `motor_work` covers the fixed
-    /// steps only and the residual holds the other intervals' motor work too.
+    /// whose balance is not checked (the error control keeps it; their work is metered
+    /// all the same, and `worst` covers the fixed steps only).
     pub unaudited: u64,
     /// The motors' power at the current state, W (the next step's first stage).
     power: T,
@@ -95,6 +95,11 @@ impl<T: Real> Balance<T> {
         }
     }
 
+    /// The motors' power at the current state, W.
+    pub(crate) fn power(&self) -> T {
+        self.power
+    }
+
     /// Work in minus energy gained since the start,
     /// `motor_work + load_work - (kinetic + potential - initial)`, J.
     pub fn residual(&self) -> T {
@@ -111,16 +116,19 @@ impl<T: Real> Balance<T> {
             + self.potential.abs()
     }
 
-    /// After an unaudited interval that ended at the workspace's state: the loads' work
-    /// (exact, from `before`), the energies and the power at the new state.
+    /// After an unaudited interval that ended at the workspace's state: the motors'
+    /// work `motor` (J, metered by [`metered_adaptive`]), the loads' work (exact, from
+    /// `before`), the energies and the power at the new state.
     pub(crate) fn skip(
         &mut self,
         model: &Model<T>,
         ws: &Workspace<T>,
         before: &LoadPoses<T>,
         h: T,
+        motor: T,
     ) {
         let e = energy(model, ws);
+        self.motor_work += motor;
         self.load_work += before.work_to(model, ws, h);
         self.kinetic = e.kinetic;
         self.potential = e.potential;
@@ -204,7 +212,16 @@ impl<T: Real> OdeSystem<T, STATE_DIM> for Metered<'_, '_, T> {
     }
 }
 
-impl<T: Real> Metered<'_, '_, T> {
+impl<'s, 'a, T: Real> Metered<'s, 'a, T> {
+    /// The equations `eq`, metered from no evaluation.
+    fn new(eq: &'s mut Equations<'a, T>) -> Self {
+        Metered {
+            eq,
+            power: [T::zero(); Tableau::STAGES],
+            evals: 0,
+        }
+    }
+
     /// The motors' work over the DP5 step of size `h` just taken, whose first stage's
     /// power is `first` (W): `h Σ B5_i P_i`, J; and the power at its last stage (its end
     /// state).
@@ -217,6 +234,32 @@ impl<T: Real> Metered<'_, '_, T> {
         }
         (h * sum, later.last().copied().unwrap_or(first))
     }
+}
+
+/// The adaptive DP5(4) `adaptive` from `(t, y)` to `t_end`
+/// ([`Adaptive::integrate_to`]), metering the motors' work of its accepted steps as
+/// [`audited_step`] does (the 5th-order weights on the stages' power; `first` is the
+/// power at `(t, y)`, W; a rejected attempt's stages are dropped). Returns the step
+/// statistics and the work, J. The trajectory is that of `integrate_to`, bit for bit.
+pub(crate) fn metered_adaptive<T: Real>(
+    sys: &mut Equations<'_, T>,
+    adaptive: &mut Adaptive<T, STATE_DIM>,
+    t: &mut T,
+    y: &mut SVector<T, STATE_DIM>,
+    t_end: T,
+    first: T,
+) -> Result<(AdaptiveStats, T), AdaptiveError<StepError>> {
+    let mut meter = Metered::new(sys);
+    let (mut motor, mut power) = (T::zero(), first);
+    let stats = adaptive.integrate_to_with(&mut meter, t, y, t_end, |m, h, accepted| {
+        if accepted {
+            let (w, p) = m.work(h, power);
+            motor += w;
+            power = p;
+        }
+        m.evals = 0;
+    })?;
+    Ok((stats, motor))
 }
 
 /// One fixed step of `h` from `(t, y)` in `substeps` DP5 steps of `h / substeps` (the
@@ -236,11 +279,7 @@ pub(crate) fn audited_step<T: Real>(
 ) -> Result<Balance<T>, StepError> {
     let (t0, t_end) = (*t, *t + h);
     let n = substeps.max(1);
-    let mut meter = Metered {
-        eq: sys,
-        power: [T::zero(); Tableau::STAGES],
-        evals: 0,
-    };
+    let mut meter = Metered::new(sys);
     let (mut motor, mut load, mut power) = (T::zero(), T::zero(), start.power);
     for k in 1..=n {
         // `t0 + h·k/n` (k/n exact: n is a power of 2); the step `t_k - t` is exact

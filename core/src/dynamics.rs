@@ -279,7 +279,7 @@ pub fn solve_accelerations<T: Real>(
     if mq.iter().chain(gf.iter()).any(|v| !v.finite()) {
         return Err(StepError::NonFinite {
             time,
-            what: "equations of motion (speeds overflow: the step is too large for the motion)",
+            what: "a term of the equations of motion (the speeds overflow it, the step is too large for the motion)",
         });
     }
     let singular = StepError::SingularMassMatrix { time };
@@ -315,7 +315,7 @@ pub fn solve_accelerations<T: Real>(
     if qdd.iter().any(|v| !v.finite()) {
         return Err(StepError::NonFinite {
             time,
-            what: "generalized accelerations (the applied forces overflow them)",
+            what: "a generalized acceleration (the applied forces overflow it)",
         });
     }
     ws.qdd = qdd;

@@ -174,7 +174,9 @@ pub enum StepError {
     NonFinite {
         /// Time, s.
         time: f64,
-        /// What was not finite.
+        /// What was not finite, with its cause, when known, in trailing parentheses
+        /// (`"a link's speed (the state has run away)"`): the message reads
+        /// "t = … s: a link's speed is not finite: the state has run away".
         what: &'static str,
     },
     /// One fixed step breaks the energy balance (the work of the motors and loads
@@ -210,14 +212,22 @@ impl fmt::Display for StepError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             StepError::Group { time, group, fault } => {
-                write!(f, "t = {time:.6} s: group {group}: {fault}")
+                write!(f, "t = {} s: group {group}: {fault}", Time(*time))
             }
             StepError::SingularMassMatrix { time } => write!(
                 f,
-                "t = {time:.6} s: the reduced mass matrix is singular (singular configuration)"
+                "t = {} s: the reduced mass matrix is singular (singular configuration)",
+                Time(*time)
             ),
             StepError::NonFinite { time, what } => {
-                write!(f, "t = {time:.6} s: {what} is not finite")
+                // `what` may carry its cause in trailing parentheses: "X (cause)" reads
+                // "X is not finite: cause".
+                match what.strip_suffix(')').and_then(|w| w.split_once(" (")) {
+                    Some((value, cause)) => {
+                        write!(f, "t = {} s: {value} is not finite: {cause}", Time(*time))
+                    }
+                    None => write!(f, "t = {} s: {what} is not finite", Time(*time)),
+                }
             }
             StepError::EnergyBalance {
                 time,
@@ -226,7 +236,8 @@ impl fmt::Display for StepError {
                 substeps,
             } => write!(
                 f,
-                "t = {time:.6} s: one step breaks the energy balance by {residual:.3e} J ({:.1e} of the energy scale {scale:.3e} J) even in sub-steps (the residual of {substeps}): the step is too large for the motion; take a smaller step",
+                "t = {} s: one step breaks the energy balance by {residual:.3e} J ({:.1e} of the energy scale {scale:.3e} J) even in sub-steps (the residual of {substeps}): the step is too large for the motion; take a smaller step",
+                Time(*time),
                 residual.abs() / scale
             ),
         }
@@ -234,3 +245,19 @@ impl fmt::Display for StepError {
 }
 
 impl core::error::Error for StepError {}
+
+/// A time in a message, s: six decimals (`1.234000`), or seven significant digits with
+/// an exponent below 1e-3 and from 1e9 on (`2.500000e-8`), where six decimals would print `0.000000` or a long run
+/// of digits.
+struct Time(f64);
+
+impl fmt::Display for Time {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let t = self.0;
+        if t == 0.0 || !t.is_finite() || (1e-3..1e9).contains(&t.abs()) {
+            write!(f, "{t:.6}")
+        } else {
+            write!(f, "{t:.6e}")
+        }
+    }
+}

@@ -2,7 +2,7 @@
 //! Dormand-Prince integrator (SPEC 1, thesis 5.2). Each [`Simulation::step`] either
 //! advances the state or returns an error and keeps the last good state.
 
-use crate::balance::{audited_step, redo_in_substeps, Balance, LoadPoses};
+use crate::balance::{audited_step, metered_adaptive, redo_in_substeps, Balance, LoadPoses};
 use crate::config::{MAX_DOF, STATE_DIM};
 use crate::dynamics::{energy, finish_accelerations, forward, generalized_accelerations, Energy};
 use crate::error::{ModelError, StepError};
@@ -93,6 +93,9 @@ pub struct Simulation<T: Real> {
     h: T,
     steps: u64,
     balance: Balance<T>,
+    /// The end time set by [`Simulation::end_at`]: the step that would pass it lands on
+    /// it.
+    end: Option<T>,
 }
 
 impl<T: Real> Simulation<T> {
@@ -129,6 +132,7 @@ impl<T: Real> Simulation<T> {
             h,
             steps: 0,
             balance,
+            end: None,
         })
     }
 
@@ -166,26 +170,34 @@ impl<T: Real> Simulation<T> {
     /// The simulation's own fixed-step integrator forgets its FSAL stage too: mixing
     /// `step` and `step_adaptive` is allowed, each starts from the state.
     ///
-    /// The interval's energy balance is not checked (the error control keeps it) and
-    /// its motor work is not metered: [`Balance::unaudited`] counts such intervals.
+    /// The interval's energy balance is not checked (the error control keeps it):
+    /// [`Balance::unaudited`] counts such intervals. Its work is metered as a fixed
+    /// step's is (the motors' with the state at the accepted steps' stages).
     pub fn step_adaptive(
         &mut self,
         adaptive: &mut Adaptive<T, STATE_DIM>,
     ) -> Result<AdaptiveStats, AdaptiveError<StepError>> {
         self.dp5.invalidate();
         let poses = LoadPoses::at(&self.model, &self.ws);
+        let first = self.balance.power();
         let r = self.advance(
             |sys, _, t, y, h| {
                 let t_end = *t + h;
-                adaptive.integrate_to(sys, t, y, t_end)
+                metered_adaptive(sys, adaptive, t, y, t_end, first)
             },
             AdaptiveError::System,
         );
         match r {
-            Ok(_) => self.balance.skip(&self.model, &self.ws, &poses, self.h),
-            Err(_) => adaptive.invalidate(),
+            Ok((stats, motor)) => {
+                self.balance
+                    .skip(&self.model, &self.ws, &poses, self.h, motor);
+                Ok(stats)
+            }
+            Err(e) => {
+                adaptive.invalidate();
+                Err(e)
+            }
         }
-        r
     }
 
     /// Takes the state from `t` to the next output time `(n+1)·h` by `integrate(system,
@@ -207,7 +219,7 @@ impl<T: Real> Simulation<T> {
         // The groups' unknowns with their cosines and sines (`GroupData::trig`): a
         // step taken back restores both, so its re-evaluation reproduces the state.
         let saved = self.ws.warm_start();
-        let t_next = T::c((self.steps + 1) as f64) * self.h;
+        let t_next = self.clamp_to_end(T::c((self.steps + 1) as f64) * self.h);
         if !t_next.finite() {
             return Err(wrap(StepError::NonFinite {
                 time: self.t.to_f64(),
@@ -250,6 +262,29 @@ impl<T: Real> Simulation<T> {
                 let _ = forward(&self.model, &mut self.ws, self.t, q, qd);
                 Err(e)
             }
+        }
+    }
+
+    /// Sets the run's end time `t_end` (s, in `(t, ∞)`): the step that would pass it is
+    /// shortened to land on it exactly (a run whose `t_end` is not a multiple of `h`
+    /// ends at `t_end`, not past it); the steps before keep `h`. Past `t_end` the steps
+    /// are `h` again. Errors: `t_end` is not finite or not after the current time.
+    pub fn end_at(&mut self, t_end: T) -> Result<(), SetupError> {
+        if !(t_end.finite() && t_end > self.t) {
+            return Err(SetupError::Setting(
+                "end time t_end must be finite and after the current time",
+            ));
+        }
+        self.end = Some(t_end);
+        Ok(())
+    }
+
+    /// The next step's end time `t_next`, or the end time of [`Simulation::end_at`] if
+    /// the step would pass it (and the state is still before it).
+    fn clamp_to_end(&self, t_next: T) -> T {
+        match self.end {
+            Some(e) if e < t_next && self.t < e => e,
+            _ => t_next,
         }
     }
 

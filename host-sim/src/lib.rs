@@ -20,7 +20,8 @@
 //! it, never from one above (`host-sim/tests/layers.rs` checks every `crate::` path),
 //! and nothing inside them uses this root's re-exports. From the bottom:
 //!
-//! 0. [`error`]: the errors of a run and of a command line, the exit codes.
+//! 0. [`error`]: the errors of a run and of a command line, the exit codes, the
+//!    number formats of messages and summaries.
 //! 1. [`draw`]: figures and their SVG and PNG rendering (plots, heat maps, frames).
 //! 2. [`model`]: what a run runs: run files, the structomatic analysis, the built-in
 //!    scenarios and run sources.

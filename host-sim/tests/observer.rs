@@ -65,10 +65,10 @@ fn a_mechanism_run_tells_every_state_and_row() {
         panic!("five-bar is a mechanism")
     };
     assert_eq!((count.starts, count.ends), (1, 1));
-    // 10 steps: 11 states; rows at steps 0, 3, 6, 9.
+    // 10 steps: 11 states; rows at steps 0, 3, 6, 9 and the last state's, step 10.
     assert_eq!(s.steps, 10);
     assert_eq!((count.mechanism_states, count.converter_states), (11, 0));
-    assert_eq!((count.rows, s.rows), (4, 4));
+    assert_eq!((count.rows, s.rows), (5, 5));
     assert_eq!(count.first_time, Some(0.0));
     assert!(count.log_widths.is_empty());
     assert_eq!(count.events, [0, 0]);

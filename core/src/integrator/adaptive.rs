@@ -196,6 +196,21 @@ impl<T: Real, const N: usize> Adaptive<T, N> {
         y: &mut SVector<T, N>,
         t_end: T,
     ) -> Result<AdaptiveStats, AdaptiveError<S::Error>> {
+        self.integrate_to_with(sys, t, y, t_end, |_, _, _| {})
+    }
+
+    /// [`Adaptive::integrate_to`], telling `attempted(sys, h, accepted)` after each
+    /// attempt: its step `h` (s, the time advanced when accepted) and whether it was
+    /// accepted. A quadrature carried with the state (a work `∫ P dt` from the power at
+    /// the stages) is summed there.
+    pub fn integrate_to_with<S: OdeSystem<T, N>>(
+        &mut self,
+        sys: &mut S,
+        t: &mut T,
+        y: &mut SVector<T, N>,
+        t_end: T,
+        mut attempted: impl FnMut(&mut S, T, bool),
+    ) -> Result<AdaptiveStats, AdaptiveError<S::Error>> {
         if !t_end.finite() {
             return Err(AdaptiveError::Settings(ThesisSettingsError::NonFinite(
                 "t_end",
@@ -215,7 +230,10 @@ impl<T: Real, const N: usize> Adaptive<T, N> {
             if stats.accepted.saturating_add(stats.rejected) >= self.settings.max_steps {
                 return Err(AdaptiveError::TooManySteps { t: t.to_f64() });
             }
-            if self.step(sys, t, y, t_end)? {
+            let t0 = *t;
+            let accepted = self.step(sys, t, y, t_end)?;
+            attempted(sys, *t - t0, accepted);
+            if accepted {
                 stats.accepted += 1;
             } else {
                 stats.rejected += 1;

@@ -56,6 +56,15 @@ t_end = 1 s): a row at t = 0, every N-th step and the last state, columns
   the energy audit and how the run ended; it is printed also when a step fails.
   ccc-s1 ending at the mechanism's singularity is its expected end: exit status 0.
 
+Every run: h <= t_end (else exit status 2); when t_end is not a multiple of h, the last
+  step is shortened to end on t_end; the CSV's last row is the last state, whatever
+  --every. The files are written to a hidden temporary file in their folder and renamed
+  when the run is over (a crash leaves no half file); the pictures of a failed run are
+  not written; an output that names the run file is refused. Ctrl-C (SIGINT) or SIGTERM:
+  the run finishes its row, completes its CSV and logs, prints its summary marked
+  interrupted and exits with status 130 (a second signal ends it at once). On a
+  terminal a long run shows its progress on stderr.
+
 Run files (TOML; the full reference with every key: host-sim/scenarios/README.md).
   SI units (m, kg, kg·m², s, N, N·m, rad/s); angles in degrees in keys ending in _deg,
   motor speeds in rpm in keys ending in _rpm. Unknown keys are errors; every value is

@@ -320,7 +320,7 @@ impl Figure {
             Format::Svg => self.to_svg().into_bytes(),
             Format::Png => self.to_png()?,
         };
-        std::fs::write(path, bytes).map_err(|e| DrawError::Write {
+        crate::error::write_whole(path, &bytes).map_err(|e| DrawError::Write {
             path: path.display().to_string(),
             error: e.to_string(),
         })

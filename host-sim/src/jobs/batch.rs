@@ -14,7 +14,7 @@
 //! `stderr` come in finishing order.
 
 use super::pool::run_jobs;
-use crate::error::{RunError, EXIT_FAILURE, EXIT_OK, EXIT_USAGE, HINT};
+use crate::error::{RunError, EXIT_FAILURE, EXIT_INTERRUPTED, EXIT_OK, EXIT_USAGE, HINT};
 use crate::model::scenarios::Source;
 use crate::options::args::parse_run_line;
 use crate::options::{BatchOptions, RunOptions, Steps};
@@ -133,6 +133,7 @@ impl Outcome {
     /// The exit status `host-sim run` gives for this run alone.
     pub fn exit_code(&self) -> u8 {
         match self {
+            Outcome::Mechanism(Ok(s)) if s.interrupted => EXIT_INTERRUPTED,
             Outcome::Mechanism(Ok(_)) => EXIT_OK,
             Outcome::Converter(Ok(s)) => s.exit_code(),
             Outcome::Mechanism(Err(e)) | Outcome::Converter(Err(e)) => e.exit_code(),
@@ -144,6 +145,11 @@ impl Outcome {
     /// `failed` (a step failed otherwise) or `error` (setup, options, files).
     pub fn end(&self) -> &'static str {
         match self {
+            Outcome::Mechanism(Ok(s)) if s.interrupted => "interrupted",
+            Outcome::Converter(Ok(CccSummary {
+                end: End::Interrupted,
+                ..
+            })) => "interrupted",
             Outcome::Mechanism(Ok(_))
             | Outcome::Converter(Ok(CccSummary {
                 end: End::Completed,
@@ -164,6 +170,7 @@ impl Outcome {
             Outcome::Mechanism(Ok(_)) => None,
             Outcome::Converter(Ok(s)) => match &s.end {
                 End::Completed => None,
+                End::Interrupted => Some("interrupted (SIGINT or SIGTERM)".to_string()),
                 End::Stopped { error, .. } => Some(format!("step {} failed: {error}", s.steps + 1)),
             },
             Outcome::Mechanism(Err(e)) | Outcome::Converter(Err(e)) => Some(e.to_string()),

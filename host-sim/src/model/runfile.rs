@@ -19,6 +19,7 @@
 //! Units: SI (m, kg, kg·m², s, N, N·m, rad/s, m/s); angles that a person writes are in
 //! degrees, in keys ending in `_deg`; motor speeds in keys ending in `_rpm`.
 
+use crate::error::Sci;
 use serde::Deserialize;
 use std::collections::BTreeMap;
 use std::fmt;
@@ -27,6 +28,11 @@ use structomat::config::{MAX_DOF, MAX_GROUND_POINTS, MAX_LINKS, MAX_LINK_POINTS,
 use structomat::motor::{rpm, Asynchronous, Motor};
 use structomat::scalar::Vec2;
 use structomat::{ModelError, Real};
+
+/// Loads (N·m, N) from which on a run is refused: the step's energy tolerance (1e-9 of
+/// an energy scale that such a load's work dominates) and the clutch's tolerances are
+/// then far coarser than the mechanism's own energies and torques.
+pub const MAX_LOAD: f64 = 1e12;
 
 /// A bad run file: which file, where (when the toml parser knows), which field, what is
 /// wrong. Displayed as `FILE[:LINE:COLUMN]: FIELD: MESSAGE`.
@@ -353,6 +359,48 @@ impl MotorSpec {
                 b: c(b),
                 c: c(cc),
             }),
+        })
+    }
+}
+
+impl MotorSpec {
+    /// The coefficients `(a, b, c)` of a quadratic characteristic `T(ω) = a + bω + cω²`
+    /// (ω in rad/s, computed in `f64`); `None` for a constant torque.
+    pub fn quadratic(&self) -> Option<(f64, f64, f64)> {
+        match self.motor::<f64>() {
+            Ok(Motor::Asynchronous(q)) => Some((q.a, q.b, q.c)),
+            _ => None,
+        }
+    }
+
+    /// The speeds the characteristic is meant for, `[0, ω_r]` rad/s: from standstill up
+    /// to the speed `ω_r = -b / 2c` past which a parabola with `c > 0` rises again
+    /// (unbounded when `c <= 0`). Between an asynchronous motor's `ω_s` and `ω_r` the
+    /// parabola brakes, as the motor does as a generator; past `ω_r` the torque grows
+    /// with speed and the motor runs away. `None` for a constant torque.
+    pub fn working_zone(&self) -> Option<(f64, f64)> {
+        let (_, b, c) = self.quadratic()?;
+        let rising = if c > 0.0 {
+            -b / (2.0 * c)
+        } else {
+            f64::INFINITY
+        };
+        Some((0.0, rising.max(0.0)))
+    }
+
+    /// The set-up warning of a characteristic that turns up again past a speed (`c > 0`):
+    /// a motor driven past it gets more torque the faster it turns and runs away.
+    pub fn warning(&self) -> Option<String> {
+        let (_, b, c) = self.quadratic()?;
+        (c > 0.0).then(|| {
+            let w = -b / (2.0 * c);
+            format!(
+                "the characteristic {} rises again past ω = {} rad/s ({} rpm): driven past \
+                 it, the motor gets more torque the faster it turns and runs away",
+                characteristic(self.quadratic().map_or(0.0, |q| q.0), b, c),
+                Sci(w),
+                Sci(w * 60.0 / std::f64::consts::TAU)
+            )
         })
     }
 }
@@ -802,6 +850,23 @@ impl Check<'_> {
         }
     }
 
+    /// A load (N·m or N): finite and below [`MAX_LOAD`] in magnitude.
+    fn load(&self, field: &str, x: f64) -> Result<f64, FileError> {
+        self.finite(field, x)?;
+        if x.abs() < MAX_LOAD {
+            Ok(x)
+        } else {
+            Err(self.err(
+                field,
+                format!(
+                    "{} is too large: from {} on the energy and clutch tolerances lose their meaning",
+                    Sci(x),
+                    Sci(MAX_LOAD)
+                ),
+            ))
+        }
+    }
+
     fn vec2(&self, field: &str, v: [f64; 2]) -> Result<[f64; 2], FileError> {
         if v.iter().all(|x| x.is_finite()) {
             Ok(v)
@@ -956,7 +1021,7 @@ fn converter(ck: &Check<'_>, c: RawConverter, run: &RawRun) -> Result<Converter,
                 "free mode has no clutch, so no shaft load (use mode = \"clutch\")",
             ))
         }
-        Some(l) => ck.non_negative("run.load", l)?,
+        Some(l) => ck.load("run.load", ck.non_negative("run.load", l)?)?,
         None => 0.0,
     };
     let motor = match &run.motor {
@@ -1082,14 +1147,42 @@ fn motor(ck: &Check<'_>, field: &str, v: &toml::Value) -> Result<MotorSpec, File
                 }
             }
             m.motor::<f64>().map_err(|e| ck.err(field, e.to_string()))?;
-            m
+            starts(ck, field, m)?
         }
-        _ => MotorSpec::Polynomial {
-            a: g("a")?,
-            b: g("b")?,
-            c: g("c")?,
-        },
+        _ => starts(
+            ck,
+            field,
+            MotorSpec::Polynomial {
+                a: g("a")?,
+                b: g("b")?,
+                c: g("c")?,
+            },
+        )?,
     })
+}
+
+/// `T(ω) = a + bω + cω²` for messages: `T(ω) = 12.6 - 2.61014 ω + 0.121585 ω² N·m`.
+fn characteristic(a: f64, b: f64, c: f64) -> String {
+    let term = |x: f64| format!("{} {}", if x < 0.0 { '-' } else { '+' }, Sci(x.abs()));
+    format!("T(ω) = {} {} ω {} ω² N·m", Sci(a), term(b), term(c))
+}
+
+/// A quadratic characteristic must give a torque `T(0) ≥ 0` at standstill: with
+/// `T(0) < 0` the motor cannot start; it turns backward, down the parabola's other
+/// branch, until its torque is no longer finite.
+fn starts(ck: &Check<'_>, field: &str, m: MotorSpec) -> Result<MotorSpec, FileError> {
+    match m.quadratic() {
+        Some((a, b, c)) if a < 0.0 => Err(ck.err(
+            field,
+            format!(
+                "the characteristic {} gives T(0) = {} N·m < 0 at standstill: the motor \
+                 cannot start; check its speeds and torques",
+                characteristic(a, b, c),
+                Sci(a)
+            ),
+        )),
+        _ => Ok(m),
+    }
 }
 
 /// Names: not empty, no `.` (it separates a link from its point in references).
@@ -1458,8 +1551,11 @@ fn mechanism(
         loads.push(LoadSpec {
             link,
             at: ck.vec2(&f("at"), l.at.unwrap_or([0.0, 0.0]))?,
-            force: ck.vec2(&f("force"), l.force.unwrap_or([0.0, 0.0]))?,
-            moment: ck.finite(&f("moment"), l.moment.unwrap_or(0.0))?,
+            force: {
+                let v = ck.vec2(&f("force"), l.force.unwrap_or([0.0, 0.0]))?;
+                [ck.load(&f("force"), v[0])?, ck.load(&f("force"), v[1])?]
+            },
+            moment: ck.load(&f("moment"), l.moment.unwrap_or(0.0))?,
         });
     }
     Ok(Mechanism {

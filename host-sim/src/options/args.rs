@@ -9,7 +9,8 @@ use super::{
     AnimFormat, BatchOptions, Output, PlotOptions, ProgressStyle, RunOptions, SweepOptions,
     DEFAULT_FPS, DEFAULT_SLOW, FPS_RANGE, MAX_THREADS, SLOW_RANGE,
 };
-use crate::error::{usage_err, UsageError};
+use crate::error::{usage_err, Sci, UsageError};
+use crate::model::runfile::MAX_LOAD;
 use crate::model::scenarios::{ScenarioId, Source};
 use clap::{Args, Parser};
 use std::path::PathBuf;
@@ -428,6 +429,13 @@ fn parse_load(value: &str) -> Result<f64, UsageError> {
     if x < 0.0 {
         return Err(usage_err(format!(
             "--load: {value} is negative ({what} expected)"
+        )));
+    }
+    if x >= MAX_LOAD {
+        return Err(usage_err(format!(
+            "--load: {value} N·m is too large: from {} N·m on the energy and clutch \
+             tolerances lose their meaning ({what} below that expected)",
+            Sci(MAX_LOAD)
         )));
     }
     // -0 is 0.

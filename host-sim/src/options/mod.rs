@@ -4,7 +4,7 @@
 
 pub mod args;
 
-use crate::error::{RunError, UsageError};
+use crate::error::{RunError, Sci, UsageError};
 use crate::model::scenarios::Source;
 use std::path::{Path, PathBuf};
 use structomat::Real;
@@ -212,6 +212,9 @@ pub struct Steps {
     pub t_end: f64,
     /// Number of steps ([`step_count`]).
     pub n: u64,
+    /// Whether `t_end` is not a multiple of `h` (to 1e-9): the last of the `n` steps is
+    /// then shorter, landing on `t_end`.
+    pub short_last: bool,
 }
 
 impl Steps {
@@ -237,9 +240,26 @@ impl Steps {
                 precision::<T>()
             ))));
         }
+        if h64 > t_end {
+            return Err(RunError::Usage(UsageError(format!(
+                "--h / --t-end: the step h = {} s is longer than the run, t_end = {} s; \
+                 take h <= t_end",
+                Sci(h64),
+                Sci(t_end)
+            ))));
+        }
         // Counted with the f64 step as given (an f32 step of 0.01 is 0.0099999998).
         let n = step_count(h64, t_end).map_err(RunError::Usage)?;
-        Ok((Steps { h: h64, t_end, n }, h))
+        let short_last = (n as f64) * h64 > t_end * (1.0 + 1e-9);
+        Ok((
+            Steps {
+                h: h64,
+                t_end,
+                n,
+                short_last,
+            },
+            h,
+        ))
     }
 
     /// The steps of `opts` in its own precision (`--f32` or `f64`).
@@ -258,7 +278,9 @@ pub fn step_count(h: f64, t_end: f64) -> Result<u64, UsageError> {
     let r = t_end / h;
     if !(r.is_finite() && r <= MAX_STEPS as f64) {
         return Err(UsageError(format!(
-            "--t-end / --h: {t_end} s / {h} s is more than {MAX_STEPS} steps"
+            "--t-end / --h: {} s / {} s is more than {MAX_STEPS} steps",
+            Sci(t_end),
+            Sci(h)
         )));
     }
     let n = if (r - r.round()).abs() <= 1e-9 * r.max(1.0) {

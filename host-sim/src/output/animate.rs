@@ -550,7 +550,7 @@ pub fn write(frames: &Frames, path: &Path) -> Result<(), DrawError> {
             AnimFormat::Svg => svg::animated(&figures, 1.0 / frames.fps as f64)?.into_bytes(),
             AnimFormat::Gif => gif(&figures, frames.fps)?,
         };
-    std::fs::write(path, bytes).map_err(|e| DrawError::Write {
+    crate::error::write_whole(path, &bytes).map_err(|e| DrawError::Write {
         path: path.display().to_string(),
         error: e.to_string(),
     })

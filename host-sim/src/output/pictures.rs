@@ -7,7 +7,7 @@ use super::plot::{self, Table};
 use super::{Cell, Observer, State, Tables};
 use crate::error::{RunError, UsageError, EXIT_FAILURE, EXIT_OK};
 use crate::options::{PlotOptions, RunOptions, Steps, MAX_FRAMES};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use structomat::Real;
 
 /// What a run records for its pictures.
@@ -72,9 +72,9 @@ pub fn write(opts: &RunOptions, rec: &Recorder) -> Result<Vec<PathBuf>, RunError
 }
 
 /// Checks `opts`'s pictures before the run, so that a bad option does not cost a run:
-/// the frame count (at most [`MAX_FRAMES`]: exit code 2), the plot
-/// directory (created) and the animation files (created empty) can be written (else
-/// exit code 1).
+/// the frame count (at most [`MAX_FRAMES`]: exit code 2), the plot directory and the
+/// animation files can be made (a folder to hold them exists, else exit code 1). Nothing
+/// is created: the pictures of a run that fails are not written at all.
 pub fn check(opts: &RunOptions) -> Result<(), RunError> {
     if !opts.animate.is_empty() {
         let steps = Steps::check(opts)?;
@@ -89,19 +89,42 @@ pub fn check(opts: &RunOptions) -> Result<(), RunError> {
             ))));
         }
     }
+    let refuse = |path: &Path, why: &str| RunError::Write {
+        target: path.display().to_string(),
+        error: std::io::Error::other(why.to_string()),
+    };
     if let Some(dir) = &opts.plot {
-        std::fs::create_dir_all(dir).map_err(|error| RunError::Write {
-            target: dir.display().to_string(),
-            error,
-        })?;
+        if dir.exists() && !dir.is_dir() {
+            return Err(refuse(dir, "--plot: it is a file, not a folder"));
+        }
+        // The folder is made when the plots are written: its nearest existing ancestor
+        // must be a folder.
+        if !dir
+            .ancestors()
+            .skip(1)
+            .find(|a| a.exists())
+            .is_none_or(Path::is_dir)
+        {
+            return Err(refuse(dir, "--plot: a file stands where a folder must be"));
+        }
     }
     for path in &opts.animate {
-        std::fs::File::create(path).map_err(|error| RunError::Write {
-            target: path.display().to_string(),
-            error,
-        })?;
+        if path.is_dir() {
+            return Err(refuse(path, "--animate: it is a folder, not a file"));
+        }
+        if !folder_of(path).is_dir() {
+            return Err(refuse(path, "--animate: no such folder"));
+        }
     }
     Ok(())
+}
+
+/// The folder that holds `path` (`.` for a bare file name).
+pub fn folder_of(path: &Path) -> &Path {
+    match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    }
 }
 
 /// `host-sim plot RUN.csv --out-dir DIR`: the plots of a CSV that `host-sim run`

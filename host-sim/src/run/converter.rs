@@ -9,7 +9,9 @@
 //! (SPEC 3), reported in the summary. Any other failed step is exit code 1, after the
 //! rows and log lines before it are written and the summary is printed.
 
-use crate::error::{RunError, EXIT_FAILURE, EXIT_OK};
+use super::interrupt;
+use super::progress::Progress;
+use crate::error::{Fig, RunError, EXIT_FAILURE, EXIT_INTERRUPTED, EXIT_OK};
 use crate::model::runfile::MotorSpec;
 use crate::model::scenarios::CccScenario;
 use crate::options::{precision, RunOptions, Steps};
@@ -111,6 +113,9 @@ pub enum End {
         /// singularity): exit code 0, else 1.
         expected: bool,
     },
+    /// SIGINT or SIGTERM stopped it after `steps` steps (their rows and log lines
+    /// written): exit code 130.
+    Interrupted,
 }
 
 impl End {
@@ -174,6 +179,7 @@ impl CccSummary {
     pub fn exit_code(&self) -> u8 {
         match self.end {
             End::Completed | End::Stopped { expected: true, .. } => EXIT_OK,
+            End::Interrupted => EXIT_INTERRUPTED,
             End::Stopped {
                 expected: false, ..
             } => EXIT_FAILURE,
@@ -215,8 +221,11 @@ impl fmt::Display for CccSummary {
         )?;
         writeln!(
             f,
-            "steps     {} of h = {} s, t = 0 .. {:.6} s, {} CSV rows",
-            self.steps, self.h, self.time, self.rows
+            "steps     {} of h = {} s, t = 0 .. {} s, {} CSV rows",
+            self.steps,
+            self.h,
+            Fig(self.time),
+            self.rows
         )?;
         match &self.logs {
             Some((e, s)) => writeln!(f, "logs      {e}, {s}")?,
@@ -226,7 +235,7 @@ impl fmt::Display for CccSummary {
             )?,
         }
         match self.first_breakaway {
-            Some((t, by)) => writeln!(f, "breakaway first at t = {t:.6} s ({by})")?,
+            Some((t, by)) => writeln!(f, "breakaway first at t = {} s ({by})", Fig(t))?,
             None => writeln!(f, "breakaway none")?,
         }
         write!(f, "events   ")?;
@@ -239,12 +248,12 @@ impl fmt::Display for CccSummary {
         let a = &self.audit;
         writeln!(
             f,
-            "energy    motor work {:.6} J, Δ(K + V) {:.6} J (K + V: {:.6} -> {:.6} J), load work {:.6} J, impact losses {:.3e} J",
-            a.motor_work,
-            a.kinetic + a.potential - a.initial,
-            a.initial,
-            a.kinetic + a.potential,
-            a.load_work,
+            "energy    motor work {} J, Δ(K + V) {} J (K + V: {} -> {} J), load work {} J, impact losses {:.3e} J",
+            Fig(a.motor_work),
+            Fig(a.kinetic + a.potential - a.initial),
+            Fig(a.initial),
+            Fig(a.kinetic + a.potential),
+            Fig(a.load_work),
             a.impact_loss
         )?;
         writeln!(
@@ -260,8 +269,11 @@ impl fmt::Display for CccSummary {
         )?;
         writeln!(
             f,
-            "final     mode {} ({} coordinates) at t = {:.6} s, shaft angle {:.6} rad",
-            self.mode, self.coords, self.time, self.shaft_angle
+            "final     mode {} ({} coordinates) at t = {} s, shaft angle {} rad",
+            self.mode,
+            self.coords,
+            Fig(self.time),
+            Fig(self.shaft_angle)
         )?;
         match &self.end {
             End::Completed => writeln!(f, "ended     reached t_end = {} s", self.t_end)?,
@@ -277,6 +289,11 @@ impl fmt::Display for CccSummary {
                 error,
                 expected: false,
             } => writeln!(f, "ended     step {} failed: {error}", self.steps + 1)?,
+            End::Interrupted => writeln!(
+                f,
+                "ended     interrupted (SIGINT or SIGTERM) after step {}: the files hold the run up to there",
+                self.steps
+            )?,
         }
         write!(
             f,
@@ -430,7 +447,13 @@ pub fn simulate<T: Real>(
     let mut written = 0u64;
     let mut steps = 0u64;
     let mut end = End::Completed;
+    let mut progress = Progress::new(t_end, opts.quiet);
     while steps < n {
+        if interrupt::requested() {
+            end = End::Interrupted;
+            break;
+        }
+        progress.tick(twin.time().to_f64());
         let t0 = Instant::now();
         let r = twin.step(&inputs);
         step_wall += t0.elapsed();
@@ -454,6 +477,7 @@ pub fn simulate<T: Real>(
         write(&twin, obs)?;
         rows += 1;
     }
+    progress.finish();
     obs.on_end()?;
     let wall = start.elapsed();
     let a = twin.audit();

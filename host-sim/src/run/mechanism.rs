@@ -2,8 +2,10 @@
 //! state and written row, and gathers the summary.
 
 use super::columns::Layout;
-use crate::error::RunError;
-use crate::model::runfile::Integrator;
+use super::interrupt;
+use super::progress::Progress;
+use crate::error::{Fig, RunError, Sci};
+use crate::model::runfile::{Body, Integrator};
 use crate::options::{precision, RunOptions, Steps};
 use crate::output::csv::{CsvWriter, Sink};
 use crate::output::{Cell, Observer, State, Tables};
@@ -13,16 +15,18 @@ use structomat::integrator::{Adaptive, AdaptiveError, AdaptiveSettings};
 use structomat::structomat::GroupKind;
 use structomat::{Real, Simulation, StepError};
 
-/// The mean of a generalized speed over the second half of a run.
+/// The time mean of a generalized speed over the second half of a run.
 #[derive(Clone, Debug, PartialEq)]
 pub struct MeanSpeed {
     /// The coordinate (0-based).
     pub coord: usize,
-    /// First time of the averaged samples, s.
+    /// Start of the averaged span, s (the first step time of the second half).
     pub from: f64,
-    /// Last time, s.
+    /// Its end, s.
     pub to: f64,
-    /// Arithmetic mean of the step samples `from..=to` (rad/s or m/s).
+    /// The time mean `∫ q̇ dt / (to - from) = (q(to) - q(from)) / (to - from)` (rad/s or
+    /// m/s): exact for the integrated state, where a mean of the step samples is biased
+    /// by `O(h)`.
     pub value: f64,
     /// Whether the coordinate is an angle (a motor element R drives it).
     pub angular: bool,
@@ -48,7 +52,8 @@ pub struct Metered {
     pub load_work: f64,
     /// Work in minus the change of K + V.
     pub residual: f64,
-    /// The worst step's balance relative to its energy scale.
+    /// The worst step's balance relative to its energy scale (fixed steps; the
+    /// adaptive integrator's intervals are not checked).
     pub worst: f64,
     /// Steps redone in sub-steps.
     pub redone: u64,
@@ -83,14 +88,15 @@ pub struct Summary {
     pub energy_start: (f64, f64),
     /// Kinetic and potential energy at the end, J.
     pub energy_end: (f64, f64),
-    /// Work of the drives, J (N·m·rad or N·m): the trapezoidal rule over the steps of
-    /// the power `Σ motor_torque · q̇`. Without other non-conservative loads,
-    /// `end - start - work` measures the integration error (plus the rule's `O(h²)`).
-    pub drive_work: f64,
-    /// The energy balance the core metered with the state, when every step was a
-    /// fixed DP5 step (`None` with the adaptive integrator, whose intervals are not
-    /// metered).
-    pub balance: Option<Metered>,
+    /// Whether SIGINT or SIGTERM stopped the run before `t_end` (after the row of its
+    /// last state was written).
+    pub interrupted: bool,
+    /// The motors' warnings: a characteristic that rises again past a speed (set-up),
+    /// a motor driven out of its working zone (the first time, with its numbers).
+    pub warnings: Vec<String>,
+    /// The energy balance the core metered with the state (with either integrator; the
+    /// worst step's is checked on the fixed steps only).
+    pub balance: Metered,
     /// Largest reaction force magnitude over every step (revolute `|F|`, prismatic `|N|`).
     pub max_reaction: Option<MaxReaction>,
     /// With `integrator = "adaptive"`: its steps accepted and rejected in all (`steps`
@@ -126,7 +132,7 @@ impl fmt::Display for List<'_> {
             if k > 0 {
                 f.write_str(", ")?;
             }
-            write!(f, "{v:.6}")?;
+            write!(f, "{}", Fig(*v))?;
         }
         f.write_str("]")
     }
@@ -141,9 +147,19 @@ impl fmt::Display for Summary {
         )?;
         writeln!(
             f,
-            "steps     {} of h = {} s, t = 0 .. {:.6} s, {} CSV rows",
-            self.steps, self.h, self.time, self.rows
+            "steps     {} of h = {} s, t = 0 .. {} s, {} CSV rows",
+            self.steps,
+            self.h,
+            Fig(self.time),
+            self.rows
         )?;
+        if self.interrupted {
+            writeln!(
+                f,
+                "interrupted at t = {} s (SIGINT or SIGTERM): the files hold the run up to there",
+                Fig(self.time)
+            )?;
+        }
         if let Some((accepted, rejected)) = self.adaptive {
             writeln!(
                 f,
@@ -160,11 +176,11 @@ impl fmt::Display for Summary {
         if let Some(m) = &self.mean_speed {
             write!(
                 f,
-                "speed     mean qd{} over t in [{:.4}, {:.4}] s: {:.6} {}",
+                "speed     time mean of qd{} over t in [{:.4}, {:.4}] s: {} {}",
                 m.coord + 1,
                 m.from,
                 m.to,
-                m.value,
+                Fig(m.value),
                 if m.angular { "rad/s" } else { "m/s" }
             )?;
             if m.angular {
@@ -175,27 +191,45 @@ impl fmt::Display for Summary {
         let (k0, v0) = self.energy_start;
         let (k1, v1) = self.energy_end;
         let (e0, e1) = (k0 + v0, k1 + v1);
-        writeln!(f, "energy    K + V: start {k0:.6} + {v0:.6} = {e0:.6} J, end {k1:.6} + {v1:.6} = {e1:.6} J")?;
-        match &self.balance {
-            Some(b) => writeln!(
-                f,
-                "balance   work of the motors {:.6} J + loads {:.6} J, end - start - work = {:.3e} J; \
-                 worst step {:.1e} of its energy scale, {} steps redone in {} sub-steps",
-                b.motor_work, b.load_work, -b.residual, b.worst, b.redone, b.substeps
-            )?,
+        writeln!(
+            f,
+            "energy    K + V: start {} + {} = {} J, end {} + {} = {} J",
+            Fig(k0),
+            Fig(v0),
+            Fig(e0),
+            Fig(k1),
+            Fig(v1),
+            Fig(e1)
+        )?;
+        let b = &self.balance;
+        write!(
+            f,
+            "balance   work of the motors {} J + loads {} J, end - start - work = {:.3e} J",
+            Fig(b.motor_work),
+            Fig(b.load_work),
+            -b.residual
+        )?;
+        match self.adaptive {
             None => writeln!(
                 f,
-                "balance   work of the drives {:.6} J (trapezoid; adaptive intervals are not metered), \
-                 end - start - work = {:.3e} J",
-                self.drive_work,
-                e1 - e0 - self.drive_work
+                "; worst step {:.1e} of its energy scale, {} steps redone in {} sub-steps",
+                b.worst, b.redone, b.substeps
             )?,
+            Some(_) => writeln!(
+                f,
+                " (adaptive steps: kept by the error control, not checked)"
+            )?,
+        }
+        for w in &self.warnings {
+            writeln!(f, "warning   {w}")?;
         }
         if let Some(r) = &self.max_reaction {
             writeln!(
                 f,
-                "reaction  max {:.6} N at {}, t = {:.6} s",
-                r.value, r.joint, r.time
+                "reaction  max {} N at {}, t = {} s",
+                Fig(r.value),
+                r.joint,
+                Fig(r.time)
             )?;
         }
         write!(
@@ -219,11 +253,25 @@ pub fn simulate<T: Real>(
 ) -> Result<Summary, RunError> {
     let precision = precision::<T>();
     let scenario = opts.scenario.build::<T>().map_err(RunError::Setup)?;
-    let (Steps { n, .. }, h) = Steps::of::<T>(opts)?;
+    let (
+        Steps {
+            n,
+            t_end,
+            short_last,
+            ..
+        },
+        h,
+    ) = Steps::of::<T>(opts)?;
     let every = opts.every.max(1);
-    let mut sim = scenario
-        .simulation_with_step(h)
-        .map_err(|e| RunError::Setup(format!("cannot set up {}: {e}", opts.scenario.name())))?;
+    let setup = |e: structomat::SetupError| {
+        RunError::Setup(format!("cannot set up {}: {e}", opts.scenario.name()))
+    };
+    let mut sim = scenario.simulation_with_step(h).map_err(setup)?;
+    if short_last {
+        // The n-th step lands on t_end; the golden runs, whose t_end is a multiple of h,
+        // keep their n·h.
+        sim.end_at(T::c(t_end)).map_err(setup)?;
+    }
     let mut adaptive = match opts.scenario.run_file().map(|f| f.run.integrator) {
         Ok(Integrator::Adaptive { rtol, atol, h_max }) => Some(
             Adaptive::new(AdaptiveSettings {
@@ -248,6 +296,7 @@ pub fn simulate<T: Real>(
         .iter()
         .find(|g| g.coord == Some(0))
         .is_some_and(|g| g.kind == GroupKind::MotorR);
+    let mut motors = MotorWatch::of(opts);
     let e0 = sim.energy();
     let energy_start = (e0.kinetic.to_f64(), e0.potential.to_f64());
 
@@ -255,20 +304,10 @@ pub fn simulate<T: Real>(
     let mut step_wall = Duration::ZERO;
     let mut rows = 0u64;
     let mut max: Option<(usize, f64, f64)> = None;
-    let (mut sum, mut count, mut from) = (0.0f64, 0u64, None);
+    // (t, q1) at the start of the mean speed's span.
+    let mut from: Option<(f64, f64)> = None;
     let first_averaged = n.div_ceil(2);
-    let drive_power = |sim: &Simulation<T>| -> f64 {
-        let ws = sim.workspace();
-        let qd = sim.qd();
-        model
-            .drives()
-            .iter()
-            .zip(ws.motor.iter())
-            .map(|(d, tau)| tau.to_f64() * qd.get(d.coord as usize).map_or(0.0, |v| v.to_f64()))
-            .sum()
-    };
-    let (mut drive_work, mut power) = (0.0f64, drive_power(&sim));
-    let half_h = 0.5 * h.to_f64();
+    let mut progress = Progress::new(t_end, opts.quiet);
     obs.on_start(&Tables {
         columns: &layout.names,
         logs: &[],
@@ -289,26 +328,23 @@ pub fn simulate<T: Real>(
                 max = Some((k, v, sim.time().to_f64()));
             }
         }
-        if steps >= first_averaged {
-            sum += sim.qd().first().map_or(f64::NAN, |v| v.to_f64());
-            count += 1;
-            from.get_or_insert(sim.time().to_f64());
+        if steps >= first_averaged && from.is_none() {
+            from = Some((
+                sim.time().to_f64(),
+                sim.q().first().map_or(f64::NAN, |v| v.to_f64()),
+            ));
         }
         obs.on_state(State::Mechanism(&sim));
-        if steps % every == 0 {
-            row.clear();
-            row.extend(
-                layout
-                    .columns
-                    .iter()
-                    .map(|c| Cell::Num(Layout::value(*c, &sim))),
-            );
-            obs.on_row(&row)?;
+        let stop = interrupt::requested();
+        // The last state is always written (`--every N` or not, stopped or not).
+        if steps % every == 0 || steps == n || stop {
+            write_row(&layout, &sim, &mut row, obs)?;
             rows += 1;
         }
-        if steps == n {
-            break Ok(());
+        if steps == n || stop {
+            break Ok(stop);
         }
+        progress.tick(sim.time().to_f64());
         let t0 = Instant::now();
         let r = match adaptive.as_mut() {
             None => sim.step().map_err(Failure::step),
@@ -324,17 +360,22 @@ pub fn simulate<T: Real>(
         };
         step_wall += t0.elapsed();
         if let Err(failure) = r {
+            // The last good state's row, if `--every` skipped it (its kinetostatics
+            // passed before the step).
+            if steps % every != 0 && sim.kinetostatics().is_ok() {
+                write_row(&layout, &sim, &mut row, obs)?;
+                rows += 1;
+            }
             break Err(failure);
         }
         steps += 1;
-        let p = drive_power(&sim);
-        drive_work += half_h * (power + p);
-        power = p;
+        motors.check(&sim);
     };
     let wall = start.elapsed();
+    progress.finish();
     obs.on_end()?;
-    match outcome {
-        Ok(()) => {}
+    let interrupted = match outcome {
+        Ok(stop) => stop,
         Err(Failure::Step {
             kinetostatics,
             error,
@@ -344,17 +385,29 @@ pub fn simulate<T: Real>(
                 kinetostatics,
                 rows,
                 error,
+                warnings: motors.warnings,
             })
         }
         Err(Failure::Integrator(error)) => return Err(RunError::Integrator { steps, rows, error }),
-    }
+    };
     let e1 = sim.energy();
-    let mean_speed = (model.dof() > 0 && count > 0).then(|| MeanSpeed {
-        coord: 0,
-        from: from.unwrap_or(0.0),
-        to: sim.time().to_f64(),
-        value: sum / count as f64,
-        angular,
+    let mean_speed = from.filter(|_| model.dof() > 0).map(|(t0, q0)| {
+        let (t1, q1) = (
+            sim.time().to_f64(),
+            sim.q().first().map_or(f64::NAN, |v| v.to_f64()),
+        );
+        MeanSpeed {
+            coord: 0,
+            from: t0,
+            to: t1,
+            // A span of no length (a run of one step): the speed there.
+            value: if t1 > t0 {
+                (q1 - q0) / (t1 - t0)
+            } else {
+                sim.qd().first().map_or(f64::NAN, |v| v.to_f64())
+            },
+            angular,
+        }
     });
     Ok(Summary {
         scenario: opts.scenario.name().to_string(),
@@ -369,8 +422,9 @@ pub fn simulate<T: Real>(
         mean_speed,
         energy_start,
         energy_end: (e1.kinetic.to_f64(), e1.potential.to_f64()),
-        drive_work,
-        balance: (sim.balance().unaudited == 0).then(|| {
+        interrupted,
+        warnings: motors.warnings,
+        balance: {
             let b = sim.balance();
             Metered {
                 motor_work: b.motor_work.to_f64(),
@@ -380,7 +434,7 @@ pub fn simulate<T: Real>(
                 redone: b.redone,
                 substeps: b.substeps,
             }
-        }),
+        },
         max_reaction: max.map(|(k, value, time)| MaxReaction {
             joint: layout.names[k].clone(),
             value,
@@ -390,6 +444,87 @@ pub fn simulate<T: Real>(
         wall,
         step_wall,
     })
+}
+
+/// Writes the row of `sim`'s state (its kinetostatics done) in the columns of `layout`
+/// to `obs`, in `row`'s buffer.
+fn write_row<T: Real>(
+    layout: &Layout,
+    sim: &Simulation<T>,
+    row: &mut Vec<Cell<'_, T>>,
+    obs: &mut dyn Observer<T>,
+) -> Result<(), RunError> {
+    row.clear();
+    row.extend(
+        layout
+            .columns
+            .iter()
+            .map(|c| Cell::Num(Layout::value(*c, sim))),
+    );
+    obs.on_row(row)
+}
+
+/// The motors' working zones ([`crate::model::runfile::MotorSpec::working_zone`]) and the warnings about
+/// them.
+struct MotorWatch {
+    /// Per driver with a quadratic characteristic: its coordinate, its zone (rad/s),
+    /// whether it was warned about.
+    zones: Vec<(usize, (f64, f64), bool)>,
+    /// The warnings so far (set-up's first).
+    warnings: Vec<String>,
+}
+
+impl MotorWatch {
+    /// The drivers' motors of `opts`'s run file, with their set-up warnings.
+    fn of(opts: &RunOptions) -> MotorWatch {
+        let mut w = MotorWatch {
+            zones: Vec::new(),
+            warnings: Vec::new(),
+        };
+        let Ok(file) = opts.scenario.run_file() else {
+            return w;
+        };
+        let Body::Mechanism(m) = &file.body else {
+            return w;
+        };
+        for (k, d) in m.drivers.iter().enumerate() {
+            let Some(motor) = d.motor else { continue };
+            if let Some(text) = motor.warning() {
+                w.warnings
+                    .push(format!("driver {} (q{}): {text}", k + 1, k + 1));
+            }
+            if let Some(zone) = motor.working_zone() {
+                w.zones.push((k, zone, false));
+            }
+        }
+        w
+    }
+
+    /// Warns, once per motor, when its speed at `sim`'s state has left its working zone
+    /// (past the zone's ends by more than 1e-6 of its width: a motor settling at `ω_s`
+    /// may overshoot it by rounding).
+    fn check<T: Real>(&mut self, sim: &Simulation<T>) {
+        for (k, (lo, hi), warned) in self.zones.iter_mut() {
+            let w = sim.qd().get(*k).map_or(0.0, |v| v.to_f64());
+            let slack = 1e-6 * (*hi - *lo).clamp(1.0, 1e6);
+            if *warned || (*lo - slack..=*hi + slack).contains(&w) {
+                continue;
+            }
+            *warned = true;
+            self.warnings.push(format!(
+                "driver {} (q{}): at t = {} s its motor turns at {} rad/s, outside its working \
+                 zone [{}, {}] rad/s: the characteristic's torque there grows with the speed \
+                 (past the upper end) or the motor turns backward (below 0), and the motion \
+                 may run away",
+                *k + 1,
+                *k + 1,
+                Sci(sim.time().to_f64()),
+                Sci(w),
+                Sci(*lo),
+                Sci(*hi)
+            ));
+        }
+    }
 }
 
 /// Why the stepping loop of [`simulate`] stopped early.

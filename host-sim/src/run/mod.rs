@@ -7,9 +7,12 @@
 
 pub mod columns;
 pub mod converter;
+pub mod interrupt;
 pub mod mechanism;
+pub mod progress;
 
-use crate::error::{report_run_error, RunError, EXIT_OK};
+use crate::error::{report_run_error, temp_path, RunError, EXIT_INTERRUPTED, EXIT_OK};
+use crate::model::scenarios::Source;
 use crate::options::{Output, RunOptions};
 use crate::output::csv::{CsvWriter, Sink};
 use crate::output::pictures::{self, Recorder};
@@ -19,7 +22,7 @@ use mechanism::Summary;
 use std::fmt;
 use std::fs::File;
 use std::io::{self, BufWriter, Write};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use structomat::Real;
 
 /// What a run did: a mechanism's summary or the converter's.
@@ -38,6 +41,7 @@ impl Report {
     /// The exit status of the run: 0, or 1 when a converter's step failed unexpectedly.
     pub fn exit_code(&self) -> u8 {
         match self {
+            Report::Mechanism(s) if s.interrupted => EXIT_INTERRUPTED,
             Report::Mechanism(_) => EXIT_OK,
             Report::Converter(s) => s.exit_code(),
         }
@@ -89,32 +93,68 @@ pub fn dispatch(
 }
 
 /// Runs `opts` with its CSV to the file `path` and, for the converter, the logs next
-/// to it ([`log_paths`]).
+/// to it ([`log_paths`]). Each file is written to its [`temp_path`] and renamed into
+/// place when the run is over (completed, failed at a step or interrupted: its rows up
+/// to there are whole), so that a crash never leaves half a file; a run that fails
+/// before its first row (its set-up) leaves none.
 pub fn run_to_file(
     opts: &RunOptions,
     path: &Path,
     rec: Option<&mut Recorder>,
 ) -> Result<Report, RunError> {
-    let create = |p: &Path| {
-        File::create(p)
-            .map(BufWriter::new)
-            .map_err(|error| RunError::write(&p.display().to_string(), error))
-    };
-    let mut csv = create(path)?;
-    let state = Sink::new(&mut csv, path.display().to_string());
-    if !opts.scenario.is_converter() {
-        return dispatch(opts, CsvWriter::new(state, Vec::new()), rec);
+    let mut targets = vec![path.to_path_buf()];
+    if opts.scenario.is_converter() {
+        let (events, switches) = log_paths(path);
+        targets.extend([events, switches]);
     }
-    let (events, switches) = log_paths(path);
-    let (mut ev, mut sw) = (create(&events)?, create(&switches)?);
-    let names = (events.display().to_string(), switches.display().to_string());
-    let logs = vec![
-        Sink::new(&mut ev, names.0.clone()),
-        Sink::new(&mut sw, names.1.clone()),
-    ];
-    let mut report = dispatch(opts, CsvWriter::new(state, logs), rec)?;
-    if let Report::Converter(s) = &mut report {
-        s.logs = Some(names);
+    let temps: Vec<_> = targets.iter().map(|p| temp_path(p)).collect();
+    let result = write_temps(opts, &targets, &temps, rec);
+    let keep = matches!(
+        result,
+        Ok(_) | Err(RunError::Step { .. } | RunError::Integrator { .. })
+    );
+    for (tmp, target) in temps.iter().zip(&targets) {
+        if tmp == target {
+            // A device or a pipe, written in place.
+        } else if keep {
+            if let Err(error) = std::fs::rename(tmp, target) {
+                let _ = std::fs::remove_file(tmp);
+                return Err(RunError::write(&target.display().to_string(), error));
+            }
+        } else {
+            let _ = std::fs::remove_file(tmp);
+        }
+    }
+    result
+}
+
+/// [`run_to_file`]'s run: the CSV (and a converter's logs) to the files `temps`, in
+/// errors and the summary named by `targets`.
+fn write_temps(
+    opts: &RunOptions,
+    targets: &[std::path::PathBuf],
+    temps: &[std::path::PathBuf],
+    rec: Option<&mut Recorder>,
+) -> Result<Report, RunError> {
+    let names: Vec<String> = targets.iter().map(|p| p.display().to_string()).collect();
+    let mut files = Vec::new();
+    for (tmp, name) in temps.iter().zip(&names) {
+        files.push(
+            File::create(tmp)
+                .map(BufWriter::new)
+                .map_err(|error| RunError::write(name, error))?,
+        );
+    }
+    let mut sinks = files
+        .iter_mut()
+        .zip(&names)
+        .map(|(f, name)| Sink::new(f, name.clone()));
+    let Some(state) = sinks.next() else {
+        return Err(RunError::Setup("no output file".to_string()));
+    };
+    let mut report = dispatch(opts, CsvWriter::new(state, sinks.collect()), rec)?;
+    if let (Report::Converter(s), [_, events, switches]) = (&mut report, &names[..]) {
+        s.logs = Some((events.clone(), switches.clone()));
     }
     Ok(report)
 }
@@ -131,11 +171,43 @@ pub fn run_quiet(opts: &RunOptions) -> Result<Report, RunError> {
     )
 }
 
+/// Refuses, before anything is written, an output path of `opts` (`--out` and a
+/// converter's logs next to it, `--plot`, `--animate`) that names its input, the run
+/// file: the run would overwrite the model it runs.
+pub fn refuse_inputs(opts: &RunOptions) -> Result<(), RunError> {
+    let Source::File { path: input, .. } = &opts.scenario else {
+        return Ok(());
+    };
+    let Ok(input) = Path::new(input).canonicalize() else {
+        return Ok(());
+    };
+    let mut outputs: Vec<PathBuf> = opts.animate.clone();
+    outputs.extend(opts.plot.clone());
+    if let Output::File(out) = &opts.out {
+        outputs.push(out.clone());
+        if opts.scenario.is_converter() {
+            let (events, switches) = log_paths(out);
+            outputs.extend([events, switches]);
+        }
+    }
+    match outputs
+        .iter()
+        .find(|p| p.canonicalize().is_ok_and(|p| p == input))
+    {
+        Some(p) => Err(RunError::Usage(crate::error::usage_err(format!(
+            "the output {} is the run file itself: the run would overwrite its model; \
+             name another file",
+            p.display()
+        )))),
+        None => Ok(()),
+    }
+}
+
 /// Runs `host-sim run` with `opts`: the CSV to the file (with a converter's logs next
 /// to it) or `stdout` (no logs), the pictures, the summary to the other stream (unless
 /// quiet), errors to `stderr`; returns the exit code.
 pub fn execute(opts: &RunOptions, stdout: &mut dyn Write, stderr: &mut dyn Write) -> u8 {
-    if let Err(e) = pictures::check(opts) {
+    if let Err(e) = refuse_inputs(opts).and_then(|()| pictures::check(opts)) {
         return report_run_error(e, stderr);
     }
     let mut rec = Recorder::for_options(opts);

@@ -68,3 +68,54 @@ pub fn files(dir: &Path) -> BTreeMap<String, Vec<u8>> {
         })
         .collect()
 }
+
+/// A CSV that `host-sim run` wrote: its header and its rows of numbers, every field
+/// parsed (an empty field is NaN). Panics, naming the row, when a row has another
+/// column count than the header or a field is not a number: a cut or garbled file.
+pub fn numeric_csv(text: &str) -> (Vec<String>, Vec<Vec<f64>>) {
+    let mut lines = text.lines();
+    let names: Vec<String> = lines
+        .next()
+        .expect("a header")
+        .split(',')
+        .map(str::to_string)
+        .collect();
+    let rows = lines
+        .enumerate()
+        .map(|(k, l)| {
+            let row: Vec<f64> = l
+                .split(',')
+                .map(|v| {
+                    if v.is_empty() {
+                        f64::NAN
+                    } else {
+                        v.parse()
+                            .unwrap_or_else(|_| panic!("row {}: '{v}' is not a number", k + 1))
+                    }
+                })
+                .collect();
+            assert_eq!(
+                row.len(),
+                names.len(),
+                "row {} has {} fields: {l}",
+                k + 1,
+                row.len()
+            );
+            row
+        })
+        .collect();
+    (names, rows)
+}
+
+/// The number after `key` in `text` (up to the next space or comma), e.g. the
+/// summary's `end - start - work = ` figure.
+pub fn number_after(text: &str, key: &str) -> f64 {
+    let at = text
+        .find(key)
+        .unwrap_or_else(|| panic!("'{key}' not in:\n{text}"));
+    let rest = &text[at + key.len()..];
+    let end = rest.find([' ', ',', ';', '\n']).unwrap_or(rest.len());
+    rest[..end]
+        .parse()
+        .unwrap_or_else(|_| panic!("'{}' after '{key}' is not a number", &rest[..end]))
+}
