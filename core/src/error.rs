@@ -126,6 +126,19 @@ pub enum GroupFault {
     BranchJump,
     /// An input (coordinate, speed) is NaN or infinite.
     NonFiniteInput,
+    /// A dead point of the coordinates that no other choice of coordinates passes
+    /// ([`crate::simulation::switch`]): the group is singular there (conditioning
+    /// `conditioning`) and so is every alternative tried (`alternatives` of them; the
+    /// best of them, its worst-conditioned group and that group's conditioning).
+    DeadPoint {
+        /// The group's normalized determinant at the last good state.
+        conditioning: f64,
+        /// Alternative choices of coordinates tried.
+        alternatives: u8,
+        /// The best conditioned of them: its worst group and conditioning (`None`: none
+        /// assembles at the pose).
+        best: Option<(GroupId, f64)>,
+    },
 }
 
 impl fmt::Display for GroupFault {
@@ -147,6 +160,20 @@ impl fmt::Display for GroupFault {
             ),
             GroupFault::BranchJump => f.write_str("left its assembly branch"),
             GroupFault::NonFiniteInput => f.write_str("non-finite input"),
+            GroupFault::DeadPoint {
+                conditioning,
+                alternatives,
+                best,
+            } => {
+                write!(
+                    f,
+                    "dead point: the driven coordinates lose the mechanism (normalized determinant {conditioning:.3e}) and no other choice of coordinates drives it there ({alternatives} tried"
+                )?;
+                match best {
+                    Some((g, c)) => write!(f, "; the best has group {g} at {c:.3e})"),
+                    None => f.write_str("; none assembles at the pose)"),
+                }
+            }
         }
     }
 }

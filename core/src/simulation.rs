@@ -15,6 +15,8 @@ use crate::workspace::Workspace;
 use core::fmt;
 use nalgebra::SVector;
 
+pub mod switch;
+
 /// Why a simulation could not be set up.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum SetupError {

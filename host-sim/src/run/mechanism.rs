@@ -1,7 +1,8 @@
 //! The mechanism runner: steps a mechanism's [`Simulation`], tells the observers every
 //! state and written row, and gathers the summary.
 
-use super::columns::Layout;
+use super::columns::{Column, Layout};
+use super::switching::{SwitchRecord, Switching};
 use crate::error::RunError;
 use crate::model::runfile::Integrator;
 use crate::options::{precision, RunOptions, Steps};
@@ -100,6 +101,8 @@ pub struct Summary {
     pub wall: Duration,
     /// Wall time inside `Simulation::step` only.
     pub step_wall: Duration,
+    /// The changes of independent coordinates at dead points of the drivers.
+    pub switches: Vec<SwitchRecord>,
 }
 
 impl Summary {
@@ -191,6 +194,20 @@ impl fmt::Display for Summary {
                 e1 - e0 - self.drive_work
             )?,
         }
+        if !self.switches.is_empty() {
+            writeln!(
+                f,
+                "switches  {} changes of coordinates at dead points of the drivers (CSV: accelerations, torques and reactions NaN while another choice drives):",
+                self.switches.len()
+            )?;
+            for s in &self.switches {
+                writeln!(
+                    f,
+                    "          t = {:.6} s: {} -> {} ({} at {:.3e}, then {:.3e})",
+                    s.time, s.from, s.to, s.group, s.conditioning[0], s.conditioning[1]
+                )?;
+            }
+        }
         if let Some(r) = &self.max_reaction {
             writeln!(
                 f,
@@ -237,6 +254,12 @@ pub fn simulate<T: Real>(
         ),
         _ => None,
     };
+    // Coordinate switching at dead points: fixed steps only (the adaptive intervals
+    // are not metered, and their error control is not the switch's).
+    let mut switching = match adaptive {
+        None => Switching::new(opts, &sim).map_err(RunError::Setup)?,
+        Some(_) => None,
+    };
     let (mut accepted, mut rejected) = (0u64, 0u64);
     let model = sim.model().clone();
     let layout = Layout::new(&model);
@@ -257,9 +280,10 @@ pub fn simulate<T: Real>(
     let mut max: Option<(usize, f64, f64)> = None;
     let (mut sum, mut count, mut from) = (0.0f64, 0u64, None);
     let first_averaged = n.div_ceil(2);
-    let drive_power = |sim: &Simulation<T>| -> f64 {
+    let drive_power = |sim: &Simulation<T>, switching: &Option<Switching<T>>| -> f64 {
         let ws = sim.workspace();
-        let qd = sim.qd();
+        let first = switching.as_ref().map(|s| s.first_qd(sim));
+        let qd = first.as_ref().map_or(sim.qd(), |q| &q[..]);
         model
             .drives()
             .iter()
@@ -267,7 +291,7 @@ pub fn simulate<T: Real>(
             .map(|(d, tau)| tau.to_f64() * qd.get(d.coord as usize).map_or(0.0, |v| v.to_f64()))
             .sum()
     };
-    let (mut drive_work, mut power) = (0.0f64, drive_power(&sim));
+    let (mut drive_work, mut power) = (0.0f64, drive_power(&sim, &switching));
     let half_h = 0.5 * h.to_f64();
     obs.on_start(&Tables {
         columns: &layout.names,
@@ -283,26 +307,30 @@ pub fn simulate<T: Real>(
                 error,
             });
         }
+        let value = |c: Column| {
+            switching
+                .as_ref()
+                .and_then(|s| s.value(c, &sim))
+                .unwrap_or_else(|| Layout::value(c, &sim))
+        };
         for &k in &forces {
-            let v = Layout::value(layout.columns[k], &sim).to_f64();
+            let v = value(layout.columns[k]).to_f64();
+            if v.is_nan() {
+                continue;
+            }
             if max.is_none_or(|(_, m, _)| v > m) {
                 max = Some((k, v, sim.time().to_f64()));
             }
         }
         if steps >= first_averaged {
-            sum += sim.qd().first().map_or(f64::NAN, |v| v.to_f64());
+            sum += value(Column::Qd(0)).to_f64();
             count += 1;
             from.get_or_insert(sim.time().to_f64());
         }
         obs.on_state(State::Mechanism(&sim));
         if steps % every == 0 {
             row.clear();
-            row.extend(
-                layout
-                    .columns
-                    .iter()
-                    .map(|c| Cell::Num(Layout::value(*c, &sim))),
-            );
+            row.extend(layout.columns.iter().map(|c| Cell::Num(value(*c))));
             obs.on_row(&row)?;
             rows += 1;
         }
@@ -311,7 +339,10 @@ pub fn simulate<T: Real>(
         }
         let t0 = Instant::now();
         let r = match adaptive.as_mut() {
-            None => sim.step().map_err(Failure::step),
+            None => match switching.as_mut() {
+                Some(s) => s.step(&mut sim).map_err(Failure::step),
+                None => sim.step().map_err(Failure::step),
+            },
             Some(a) => match sim.step_adaptive(a) {
                 Ok(stats) => {
                     accepted += u64::from(stats.accepted);
@@ -327,7 +358,7 @@ pub fn simulate<T: Real>(
             break Err(failure);
         }
         steps += 1;
-        let p = drive_power(&sim);
+        let p = drive_power(&sim, &switching);
         drive_work += half_h * (power + p);
         power = p;
     };
@@ -349,6 +380,18 @@ pub fn simulate<T: Real>(
         Err(Failure::Integrator(error)) => return Err(RunError::Integrator { steps, rows, error }),
     }
     let e1 = sim.energy();
+    let (q_end, qd_end): (Vec<f64>, Vec<f64>) = (0..model.dof())
+        .map(|j| {
+            let at = |c: Column| {
+                switching
+                    .as_ref()
+                    .and_then(|s| s.value(c, &sim))
+                    .unwrap_or_else(|| Layout::value(c, &sim))
+                    .to_f64()
+            };
+            (at(Column::Q(j)), at(Column::Qd(j)))
+        })
+        .unzip();
     let mean_speed = (model.dof() > 0 && count > 0).then(|| MeanSpeed {
         coord: 0,
         from: from.unwrap_or(0.0),
@@ -364,8 +407,8 @@ pub fn simulate<T: Real>(
         steps,
         time: sim.time().to_f64(),
         rows,
-        q: sim.q().iter().map(|v| v.to_f64()).collect(),
-        qd: sim.qd().iter().map(|v| v.to_f64()).collect(),
+        q: q_end,
+        qd: qd_end,
         mean_speed,
         energy_start,
         energy_end: (e1.kinetic.to_f64(), e1.potential.to_f64()),
@@ -389,6 +432,7 @@ pub fn simulate<T: Real>(
         adaptive: adaptive.map(|_| (accepted, rejected)),
         wall,
         step_wall,
+        switches: switching.map(|s| s.log).unwrap_or_default(),
     })
 }
 

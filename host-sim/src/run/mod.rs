@@ -8,6 +8,7 @@
 pub mod columns;
 pub mod converter;
 pub mod mechanism;
+pub mod switching;
 
 use crate::error::{report_run_error, RunError, EXIT_OK};
 use crate::options::{Output, RunOptions};
