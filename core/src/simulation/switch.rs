@@ -186,15 +186,21 @@ impl<T: Real, const N: usize> Alternatives<T, N> {
         sim: &mut Simulation<T>,
     ) -> Result<Option<CoordinateSwitch<T>>, StepError> {
         let mut switched = self.choose(sim, false);
+        // Under the threshold the coordinates' accelerations grow without bound toward
+        // the dead point: a step there that breaks the energy balance fails as at it.
+        let ill = worst_group(&sim.model, &sim.ws).0 < self.settings.switch_below;
+        let at_dead_point = |e: &StepError| {
+            is_dead_point(e) || (ill && matches!(e, StepError::EnergyBalance { .. }))
+        };
         match sim.step() {
             Ok(()) => {}
-            Err(e) if is_dead_point(&e) => {
+            Err(e) if at_dead_point(&e) => {
                 let Some(s) = self.choose(sim, true) else {
                     return Err(self.dead_point(sim, e));
                 };
                 switched = Some(s);
                 sim.step().map_err(|e| {
-                    if is_dead_point(&e) {
+                    if at_dead_point(&e) {
                         self.dead_point(sim, e)
                     } else {
                         e
