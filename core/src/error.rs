@@ -128,16 +128,16 @@ pub enum GroupFault {
     NonFiniteInput,
     /// A dead point of the coordinates that no other choice of coordinates passes
     /// ([`crate::simulation::switch`]): the group is singular there (conditioning
-    /// `conditioning`) and so is every alternative tried (`alternatives` of them; the
-    /// best of them, its worst-conditioned group and that group's conditioning).
+    /// `conditioning`) and so is every alternative tried (`alternatives` of them; `best`
+    /// the worst-group conditioning of the best of them, NaN if none assembles there).
     DeadPoint {
         /// The group's normalized determinant at the last good state.
         conditioning: f64,
+        /// The best alternative's worst normalized determinant there (NaN: none
+        /// assembles at the pose).
+        best: f32,
         /// Alternative choices of coordinates tried.
         alternatives: u8,
-        /// The best conditioned of them: its worst group and conditioning (`None`: none
-        /// assembles at the pose).
-        best: Option<(GroupId, f64)>,
     },
 }
 
@@ -169,9 +169,10 @@ impl fmt::Display for GroupFault {
                     f,
                     "dead point: the driven coordinates lose the mechanism (normalized determinant {conditioning:.3e}) and no other choice of coordinates drives it there ({alternatives} tried"
                 )?;
-                match best {
-                    Some((g, c)) => write!(f, "; the best has group {g} at {c:.3e})"),
-                    None => f.write_str("; none assembles at the pose)"),
+                if best.is_nan() {
+                    f.write_str("; none assembles at the pose)")
+                } else {
+                    write!(f, "; the best is conditioned at {best:.3e})")
                 }
             }
         }

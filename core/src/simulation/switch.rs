@@ -347,15 +347,15 @@ impl<T: Real, const N: usize> Alternatives<T, N> {
             StepError::Group { group, .. } => group,
             _ => worst,
         };
-        let mut best: Option<(GroupId, f64)> = None;
+        let mut best = f32::NAN;
         for k in 0..self.models.len() {
             if k == self.active as usize {
                 continue;
             }
             if let Some(t) = self.trial(k, sim) {
-                let c = t.conditioning.to_f64();
-                if best.is_none_or(|(_, b)| c > b) {
-                    best = Some((t.worst, c));
+                let c = t.conditioning.to_f64() as f32;
+                if best.is_nan() || c > best {
+                    best = c;
                 }
             }
         }
@@ -364,8 +364,8 @@ impl<T: Real, const N: usize> Alternatives<T, N> {
             group,
             fault: GroupFault::DeadPoint {
                 conditioning: cond.to_f64(),
-                alternatives: self.models.len().saturating_sub(1) as u8,
                 best,
+                alternatives: self.models.len().saturating_sub(1) as u8,
             },
         }
     }
