@@ -244,11 +244,14 @@ impl<T: Real, const N: usize> Alternatives<T, N> {
             self.first_state_from(sim);
         }
         let mut best: Option<(usize, Trial<T>)> = None;
+        // The alternative whose evaluation the scratch workspace holds.
+        let mut evaluated = None;
         for k in 0..self.models.len() {
             if k == self.active as usize {
                 continue;
             }
             if let Some(t) = self.trial(k, sim) {
+                evaluated = Some(k);
                 if best
                     .as_ref()
                     .is_none_or(|(_, b)| t.conditioning > b.conditioning)
@@ -257,11 +260,15 @@ impl<T: Real, const N: usize> Alternatives<T, N> {
                 }
             }
         }
-        let (k, t) = best?;
+        let (k, mut t) = best?;
         // The threshold's own scale: a switch must gain conditioning, not trade one
         // ill-conditioned choice for another just as bad.
         if !(t.conditioning > cond * T::c(1.5)) || !(t.conditioning > sim.model.singular_tol()) {
             return None;
+        }
+        if evaluated != Some(k) {
+            // A later candidate's trial overwrote its evaluation: again (the same bits).
+            t = self.trial(k, sim)?;
         }
         Some(self.commit(k, t, sim, cond, group))
     }
