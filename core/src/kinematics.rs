@@ -179,16 +179,11 @@ pub fn assemble<T: Real>(
     ws: &mut Workspace<T>,
     q: &[T],
 ) -> Result<(), StepError> {
-    if q.iter().any(|v| !v.finite()) {
-        return Err(StepError::NonFinite {
-            time: 0.0,
-            what: "initial coordinates",
-        });
-    }
     assemble_by(
         model,
         ws,
         q,
+        "initial coordinates",
         |g, _| g.guess,
         |g, trial, _| distance_to_guess(g, &trial.x),
     )
@@ -205,16 +200,11 @@ pub(crate) fn assemble_near<T: Real>(
     q: &[T],
     near: &[BodyState<T>],
 ) -> Result<(), StepError> {
-    if q.iter().any(|v| !v.finite()) {
-        return Err(StepError::NonFinite {
-            time: 0.0,
-            what: "coordinates to switch to",
-        });
-    }
     assemble_by(
         model,
         ws,
         q,
+        "coordinates to switch to",
         |g, _| {
             let mut x = g.guess;
             for p in g.placements.iter() {
@@ -243,14 +233,18 @@ pub(crate) fn assemble_near<T: Real>(
 
 /// [`assemble`] with the Newton groups' starting unknowns `start(group, bodies)` and
 /// the measure `distance(group, solved data, bodies)` by which a closed-form dyad picks
-/// its branch.
+/// its branch; `what` names `q` if it is not finite.
 fn assemble_by<T: Real>(
     model: &Model<T>,
     ws: &mut Workspace<T>,
     q: &[T],
+    what: &'static str,
     start: impl Fn(&Group<T>, &[BodyState<T>]) -> [T; MAX_GROUP_VARS],
     distance: impl Fn(&Group<T>, &GroupData<T>, &[BodyState<T>]) -> T,
 ) -> Result<(), StepError> {
+    if q.iter().any(|v| !v.finite()) {
+        return Err(StepError::NonFinite { time: 0.0, what });
+    }
     for (k, v) in ws.q.iter_mut().enumerate() {
         *v = q.get(k).copied().unwrap_or(T::zero());
     }

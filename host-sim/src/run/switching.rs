@@ -54,7 +54,7 @@ impl<T: Real> Switching<T> {
         let Ok(file) = opts.scenario.run_file() else {
             return Ok(None);
         };
-        let crate::runfile::Body::Mechanism(m) = &file.body else {
+        let crate::model::runfile::Body::Mechanism(m) = &file.body else {
             return Ok(None);
         };
         let models = crate::model::alternatives::alternatives::<T>(m)
