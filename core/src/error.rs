@@ -223,6 +223,18 @@ pub enum StepError {
 }
 
 impl StepError {
+    /// The same failure at time `time` (s): where it was located inside the step
+    /// ([`Simulation::locate_failure`](crate::Simulation::locate_failure)). A broken
+    /// energy balance keeps its time, the step's start.
+    pub fn at_time(self, time: f64) -> StepError {
+        match self {
+            StepError::Group { group, fault, .. } => StepError::Group { time, group, fault },
+            StepError::SingularMassMatrix { .. } => StepError::SingularMassMatrix { time },
+            StepError::NonFinite { what, .. } => StepError::NonFinite { time, what },
+            e @ StepError::EnergyBalance { .. } => e,
+        }
+    }
+
     /// Time of the failure, s.
     pub fn time(&self) -> f64 {
         match *self {

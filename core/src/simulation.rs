@@ -15,6 +15,7 @@ use crate::workspace::Workspace;
 use core::fmt;
 use nalgebra::SVector;
 
+pub mod singular;
 pub mod switch;
 
 /// Why a simulation could not be set up.

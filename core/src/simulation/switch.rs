@@ -19,6 +19,7 @@
 //! bodies), the new sequence is assembled at them on the branch nearest the bodies'
 //! poses, and the switch is refused if any link lands more than a tolerance away.
 
+use super::singular::at_singularity;
 use super::{check_outputs, Simulation};
 use crate::balance::Balance;
 use crate::config::{MAX_DOF, MAX_GROUPS};
@@ -190,7 +191,7 @@ impl<T: Real, const N: usize> Alternatives<T, N> {
         // the dead point: a step there that breaks the energy balance fails as at it.
         let ill = worst_group(&sim.model, &sim.ws).0 < self.settings.switch_below;
         let at_dead_point = |e: &StepError| {
-            is_dead_point(e) || (ill && matches!(e, StepError::EnergyBalance { .. }))
+            at_singularity(e) || (ill && matches!(e, StepError::EnergyBalance { .. }))
         };
         match sim.step() {
             Ok(()) => {}
@@ -375,16 +376,6 @@ impl<T: Real, const N: usize> Alternatives<T, N> {
                 alternatives: self.models.len().saturating_sub(1) as u8,
             },
         }
-    }
-}
-
-/// Whether a step failed as at a dead point of its coordinates: a group singular,
-/// unable to assemble, off its branch or unsolved, or the mass matrix singular.
-fn is_dead_point(e: &StepError) -> bool {
-    match e {
-        StepError::Group { fault, .. } => !matches!(fault, GroupFault::NonFiniteInput),
-        StepError::SingularMassMatrix { .. } => true,
-        _ => false,
     }
 }
 

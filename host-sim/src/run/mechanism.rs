@@ -11,6 +11,7 @@ use crate::output::{Cell, Observer, State, Tables};
 use std::fmt;
 use std::time::{Duration, Instant};
 use structomat::integrator::{Adaptive, AdaptiveError, AdaptiveSettings};
+use structomat::simulation::singular::at_singularity;
 use structomat::structomat::GroupKind;
 use structomat::{Real, Simulation, StepError};
 
@@ -355,7 +356,7 @@ pub fn simulate<T: Real>(
         };
         step_wall += t0.elapsed();
         if let Err(failure) = r {
-            break Err(failure);
+            break Err(failure.located(&sim));
         }
         steps += 1;
         let p = drive_power(&sim, &switching);
@@ -454,6 +455,25 @@ impl Failure {
         Failure::Step {
             kinetostatics: false,
             error,
+        }
+    }
+
+    /// A step's failure at a singularity of the mechanism with the time located inside
+    /// the step ([`Simulation::locate_failure`]); the others as they are.
+    fn located<T: Real>(self, sim: &Simulation<T>) -> Self {
+        match self {
+            Failure::Step {
+                kinetostatics: false,
+                error,
+            } if at_singularity(&error) => {
+                let mut scratch = Box::new(structomat::Workspace::new());
+                let error = match sim.locate_failure(&mut scratch) {
+                    Some(t) => error.at_time(t.to_f64()),
+                    None => error,
+                };
+                Failure::step(error)
+            }
+            f => f,
         }
     }
 }
