@@ -93,6 +93,18 @@ fn assert_dp5_order(text: &str, a: &[[f64; 2]], h: f64, t_end: f64, bound: f64) 
     );
 }
 
+/// The energy balance over the run, switches included: the work of the motor against
+/// Δ(K + V), to 1e-6 of the energy the run moves (the scale: 1 J + |work| + K + |V|).
+fn assert_balance_closed(sim: &Simulation<f64>) {
+    let b = sim.balance();
+    assert!(
+        b.residual().abs() < 1e-6 * b.scale(),
+        "residual {:e} of scale {:e}",
+        b.residual(),
+        b.scale()
+    );
+}
+
 /// The piston-driven slider-crank passes its crank's dead centres (the RRR dyad of crank
 /// and rod singular under the piston's coordinate) six times in 1 s; on the present code
 /// the piston coordinate stops there ("singular Jacobian" / "cannot assemble").
@@ -101,15 +113,7 @@ fn piston_driven_slider_crank_passes_its_dead_centres() {
     let (a, switches, sim) = run(PISTON, 1e-3, 1.0, 0.05);
     // Each dead centre is one switch away from the piston and one back.
     assert!(switches >= 6, "{switches} switches");
-    // Energy balance: the work of the piston's force against Δ(K + V), to 1e-6 of the
-    // energy the run moves (the scale: 1 J + |work| + K + |V|).
-    let b = sim.balance();
-    assert!(
-        b.residual().abs() < 1e-6 * b.scale(),
-        "residual {:e} of scale {:e}",
-        b.residual(),
-        b.scale()
-    );
+    assert_balance_closed(&sim);
     // The piston's position against the closed form of the crank angle at the end.
     let ws = sim.workspace();
     let th = ws.body[1].theta;
@@ -130,13 +134,7 @@ fn piston_driven_slider_crank_passes_its_dead_centres() {
 fn rocker_driving_a_triad_passes_its_dead_points() {
     let (a, switches, sim) = run(TRIAD, 1e-3, 2.5, 0.05);
     assert!(switches >= 8, "{switches} switches");
-    let b = sim.balance();
-    assert!(
-        b.residual().abs() < 1e-6 * b.scale(),
-        "residual {:e} of scale {:e}",
-        b.residual(),
-        b.scale()
-    );
+    assert_balance_closed(&sim);
     // The rocker's angle stays in its swing, [-75.86°, -21.02°] (the four-bar
     // K2-b2-plate-b3-K3 and the dyad at A by circle intersections, in the file's notes).
     for [q, _] in &a {
