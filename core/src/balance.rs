@@ -101,6 +101,17 @@ impl<T: Real> Balance<T> {
     }
 
     /// Work in minus energy gained since the start,
+    /// The energies and the motors' power at the workspace's state, the works kept:
+    /// after the same state is described by other coordinates
+    /// ([`crate::simulation::switch`]), whose energies differ from the old ones by the
+    /// rounding of the assembly only (which the residual then shows).
+    pub(crate) fn rebase(&mut self, model: &Model<T>, ws: &Workspace<T>) {
+        let e = energy(model, ws);
+        self.kinetic = e.kinetic;
+        self.potential = e.potential;
+        self.power = motor_power(model, ws);
+    }
+
     /// `motor_work + load_work - (kinetic + potential - initial)`, J.
     pub fn residual(&self) -> T {
         self.motor_work + self.load_work - (self.kinetic + self.potential - self.initial)
@@ -141,7 +152,7 @@ impl<T: Real> Balance<T> {
 fn motor_power<T: Real>(model: &Model<T>, ws: &Workspace<T>) -> T {
     let mut p = T::zero();
     for (d, tau) in model.drives().iter().zip(ws.motor.iter()) {
-        p += *tau * ws.qd.get(d.coord as usize).copied().unwrap_or(T::zero());
+        p += *tau * crate::dynamics::drive_motion(model, ws, d).1;
     }
     p
 }

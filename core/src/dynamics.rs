@@ -9,7 +9,7 @@
 use crate::config::{MAX_DOF, POSE_ROWS};
 use crate::error::StepError;
 use crate::linalg::{cholesky, cholesky_solve};
-use crate::model::Model;
+use crate::model::{Drive, Model};
 use crate::scalar::{cross, perp, rotate_cs, Real, Vec2};
 use crate::structomat::JointKind;
 use crate::transmission::evaluate;
@@ -56,12 +56,8 @@ pub fn applied_forces<T: Real>(
     ws: &mut Workspace<T>,
     t: T,
 ) -> Result<(), StepError> {
-    for (d, slot) in model.drives().iter().zip(ws.motor.iter_mut()) {
-        let j = d.coord as usize;
-        let (q, qd) = (
-            ws.q.get(j).copied().unwrap_or(T::zero()),
-            ws.qd.get(j).copied().unwrap_or(T::zero()),
-        );
+    for (k, d) in model.drives().iter().enumerate() {
+        let (q, qd) = drive_motion(model, ws, d);
         let tau = d.motor.torque(t, q, qd);
         if !tau.finite() {
             return Err(StepError::NonFinite {
@@ -69,7 +65,9 @@ pub fn applied_forces<T: Real>(
                 what: "motor torque",
             });
         }
-        *slot = tau;
+        if let Some(slot) = ws.motor.get_mut(k) {
+            *slot = tau;
+        }
     }
     // Built in place: the live rows of the links, zeros past them.
     let Workspace {
@@ -84,6 +82,10 @@ pub fn applied_forces<T: Real>(
         let Some(grp) = model.groups().get(d.group as usize) else {
             continue;
         };
+        if let Some(j) = d.joint {
+            add_across(model, body, f, grp, j, *tau);
+            continue;
+        }
         for jt in grp.joints.iter() {
             let bi = body.get(jt.i as usize).copied().unwrap_or_default();
             let bj = body.get(jt.j as usize).copied().unwrap_or_default();
@@ -98,6 +100,70 @@ pub fn applied_forces<T: Real>(
         }
     }
     Ok(())
+}
+
+/// The motion a drive's law reads: its coordinate and rate, or for a drive across a
+/// joint ([`Drive`]) the joint's relative angle `θ_i - θ_j` (rad) and speed, or the
+/// offset of the slider's joint point along the guide of `j` (m, from the guide's
+/// joint point) and its rate.
+pub fn drive_motion<T: Real>(model: &Model<T>, ws: &Workspace<T>, d: &Drive<T>) -> (T, T) {
+    let Some(j) = d.joint else {
+        let c = d.coord as usize;
+        return (
+            ws.q.get(c).copied().unwrap_or(T::zero()),
+            ws.qd.get(c).copied().unwrap_or(T::zero()),
+        );
+    };
+    let Some(jt) = model
+        .groups()
+        .get(d.group as usize)
+        .and_then(|g| g.joints.get(j as usize))
+    else {
+        return (T::zero(), T::zero());
+    };
+    let bi = ws.body.get(jt.i as usize).copied().unwrap_or_default();
+    let bj = ws.body.get(jt.j as usize).copied().unwrap_or_default();
+    match jt.kind {
+        JointKind::Prismatic { dir } => {
+            let ri = rotate_cs(bi.c, bi.s, &jt.pi);
+            let rj = rotate_cs(bj.c, bj.s, &jt.pj);
+            let u = rotate_cs(bj.c, bj.s, &dir);
+            let gap = (bi.o + ri) - (bj.o + rj);
+            let vi = bi.v + perp(&ri) * bi.omega;
+            let vj = bj.v + perp(&rj) * bj.omega;
+            // d/dt (gap · u), u turning with body j.
+            (
+                gap.dot(&u),
+                (vi - vj).dot(&u) + gap.dot(&perp(&u)) * bj.omega,
+            )
+        }
+        _ => (bi.theta - bj.theta, bi.omega - bj.omega),
+    }
+}
+
+/// Adds the torque (revolute) or force along the guide (prismatic) `tau` of a drive
+/// across joint `j` of group `grp` to the loads `f`: on the joint's body `i`, its
+/// reaction on `j`, at `i`'s joint point.
+fn add_across<T: Real>(
+    model: &Model<T>,
+    body: &[BodyState<T>],
+    f: &mut SVector<T, POSE_ROWS>,
+    grp: &crate::structomat::Group<T>,
+    j: u8,
+    tau: T,
+) {
+    let Some(jt) = grp.joints.get(j as usize) else {
+        return;
+    };
+    let bi = body.get(jt.i as usize).copied().unwrap_or_default();
+    let bj = body.get(jt.j as usize).copied().unwrap_or_default();
+    let at = bi.o + rotate_cs(bi.c, bi.s, &jt.pi);
+    let (u, m) = match jt.kind {
+        JointKind::Prismatic { dir } => (rotate_cs(bj.c, bj.s, &dir) * tau, T::zero()),
+        _ => (Vec2::zeros(), tau),
+    };
+    add_load(model, body, f, jt.i, at, u, m);
+    add_load(model, body, f, jt.j, at, -u, -m);
 }
 
 /// Sets `f` to the loads other than the motors: gravity at every COG, then the model's

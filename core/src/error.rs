@@ -126,6 +126,19 @@ pub enum GroupFault {
     BranchJump,
     /// An input (coordinate, speed) is NaN or infinite.
     NonFiniteInput,
+    /// A dead point of the coordinates that no other choice of coordinates passes
+    /// ([`crate::simulation::switch`]): the group is singular there (conditioning
+    /// `conditioning`) and so is every alternative tried (`alternatives` of them; `best`
+    /// the worst-group conditioning of the best of them, NaN if none assembles there).
+    DeadPoint {
+        /// The group's normalized determinant at the last good state.
+        conditioning: f64,
+        /// The best alternative's worst normalized determinant there (NaN: none
+        /// assembles at the pose).
+        best: f32,
+        /// Alternative choices of coordinates tried.
+        alternatives: u8,
+    },
 }
 
 impl fmt::Display for GroupFault {
@@ -147,6 +160,21 @@ impl fmt::Display for GroupFault {
             ),
             GroupFault::BranchJump => f.write_str("left its assembly branch"),
             GroupFault::NonFiniteInput => f.write_str("non-finite input"),
+            GroupFault::DeadPoint {
+                conditioning,
+                alternatives,
+                best,
+            } => {
+                write!(
+                    f,
+                    "dead point: the driven coordinates lose the mechanism (normalized determinant {conditioning:.3e}) and no other choice of coordinates drives it there ({alternatives} tried"
+                )?;
+                if best.is_nan() {
+                    f.write_str("; none assembles at the pose)")
+                } else {
+                    write!(f, "; the best is conditioned at {best:.3e})")
+                }
+            }
         }
     }
 }
@@ -197,6 +225,18 @@ pub enum StepError {
 }
 
 impl StepError {
+    /// The same failure at time `time` (s): where it was located inside the step
+    /// ([`Simulation::locate_failure`](crate::Simulation::locate_failure)). A broken
+    /// energy balance keeps its time, the step's start.
+    pub fn at_time(self, time: f64) -> StepError {
+        match self {
+            StepError::Group { group, fault, .. } => StepError::Group { time, group, fault },
+            StepError::SingularMassMatrix { .. } => StepError::SingularMassMatrix { time },
+            StepError::NonFinite { what, .. } => StepError::NonFinite { time, what },
+            e @ StepError::EnergyBalance { .. } => e,
+        }
+    }
+
     /// Time of the failure, s.
     pub fn time(&self) -> f64 {
         match *self {

@@ -179,11 +179,71 @@ pub fn assemble<T: Real>(
     ws: &mut Workspace<T>,
     q: &[T],
 ) -> Result<(), StepError> {
+    assemble_by(
+        model,
+        ws,
+        q,
+        "initial coordinates",
+        |g, _| g.guess,
+        |g, trial, _| distance_to_guess(g, &trial.x),
+    )
+}
+
+/// Assembles the mechanism at `q` near the poses `near` (the same links under other
+/// coordinates, [`crate::simulation::switch`]): each closed-form dyad takes the branch
+/// that places its links nearest their poses there; Newton groups start from the link
+/// angles read off them (slides from the guesses: the groups with slides Newton solves
+/// are linear, one step from anywhere) and record the sign of det W as their branch.
+pub(crate) fn assemble_near<T: Real>(
+    model: &Model<T>,
+    ws: &mut Workspace<T>,
+    q: &[T],
+    near: &[BodyState<T>],
+) -> Result<(), StepError> {
+    assemble_by(
+        model,
+        ws,
+        q,
+        "coordinates to switch to",
+        |g, _| {
+            let mut x = g.guess;
+            for p in g.placements.iter() {
+                if let (Base::Var(k), Some(b)) = (p.angle.base, near.get(p.link as usize)) {
+                    if let Some(v) = x.get_mut(k as usize) {
+                        *v = b.theta - p.angle.offset;
+                    }
+                }
+            }
+            x
+        },
+        |g, _, body| {
+            let mut d = T::zero();
+            for l in g.links() {
+                let (Some(a), Some(b)) = (body.get(l as usize), near.get(l as usize)) else {
+                    continue;
+                };
+                let e = a.theta - b.theta;
+                let e = (e + T::pi()).rem_euclid(T::two_pi()) - T::pi();
+                d += (a.o - b.o).norm_squared() + e * e;
+            }
+            d
+        },
+    )
+}
+
+/// [`assemble`] with the Newton groups' starting unknowns `start(group, bodies)` and
+/// the measure `distance(group, solved data, bodies)` by which a closed-form dyad picks
+/// its branch; `what` names `q` if it is not finite.
+fn assemble_by<T: Real>(
+    model: &Model<T>,
+    ws: &mut Workspace<T>,
+    q: &[T],
+    what: &'static str,
+    start: impl Fn(&Group<T>, &[BodyState<T>]) -> [T; MAX_GROUP_VARS],
+    distance: impl Fn(&Group<T>, &GroupData<T>, &[BodyState<T>]) -> T,
+) -> Result<(), StepError> {
     if q.iter().any(|v| !v.finite()) {
-        return Err(StepError::NonFinite {
-            time: 0.0,
-            what: "initial coordinates",
-        });
+        return Err(StepError::NonFinite { time: 0.0, what });
     }
     for (k, v) in ws.q.iter_mut().enumerate() {
         *v = q.get(k).copied().unwrap_or(T::zero());
@@ -191,7 +251,7 @@ pub fn assemble<T: Real>(
     let Workspace { body, group, .. } = ws;
     for (i, (g, gd)) in model.groups().iter().zip(group.iter_mut()).enumerate() {
         *gd = GroupData::default();
-        gd.x = g.guess;
+        gd.x = start(g, body);
         match g.kind {
             GroupKind::Rrr | GroupKind::Rrt | GroupKind::Rtr => {
                 // (distance, trial, whether it is the last trial that placed the links)
@@ -206,7 +266,7 @@ pub fn assemble<T: Real>(
                     }
                     match solve_group(g, &mut trial, model, body, q, &[]) {
                         Ok(_) => {
-                            let d = distance_to_guess(g, &trial.x);
+                            let d = distance(g, &trial, body);
                             if best.as_ref().is_none_or(|(bd, _, _)| d < *bd) {
                                 best = Some((d, trial, true));
                             }

@@ -96,14 +96,29 @@ const _: () = assert!(MAX_DOF <= 4 && MAX_GROUPS <= 255 && MAX_LINKS <= 254);
 /// A motor model acting on a generalized coordinate, through the motor element that
 /// drives it: a torque on its link (element R) or a force along its guide (element T),
 /// the reaction on the body it is mounted on.
+///
+/// A drive *across a joint* ([`ModelBuilder::drive_across`]) acts on a joint that is
+/// no coordinate's: a motor whose link the sequence places by another group (an
+/// alternative choice of coordinates, [`crate::simulation::switch`]). Its law reads
+/// the joint's relative motion (a revolute joint: `θ_i - θ_j` and `ω_i - ω_j`; a
+/// prismatic one: the offset along the guide and its rate), and its torque or force
+/// maps onto the coordinates through the transmission, as any load does.
 #[derive(Clone, Copy, Debug)]
 pub struct Drive<T: Real> {
-    /// The coordinate.
+    /// The coordinate ([`Drive::ACROSS`] for a drive across a joint).
     pub coord: u8,
-    /// Index in the sequence of the motor element that applies it.
+    /// Index in the sequence of the motor element that applies it, or of the group
+    /// whose joint `joint` it acts across.
     pub group: u8,
     /// The torque (N·m) or force (N) law.
     pub motor: Motor<T>,
+    /// For a drive across a joint: the joint's index in its group's joints.
+    pub joint: Option<u8>,
+}
+
+impl<T: Real> Drive<T> {
+    /// The `coord` of a drive across a joint: it drives no coordinate.
+    pub const ACROSS: u8 = u8::MAX;
 }
 
 /// A constant external load on a link: a force at a point and a moment.
@@ -544,6 +559,30 @@ impl<T: Real, M: DerefMut<Target = Model<T>>> ModelBuilder<T, M> {
                 coord,
                 group: u8::MAX,
                 motor,
+                joint: None,
+            })
+            .map_err(|_| ModelError::Capacity("drives"))?;
+        Ok(self)
+    }
+
+    /// Puts a motor across the joint between link `body` and body `on` (a revolute or
+    /// prismatic joint of the group that places `body`, `body` its moving side): its
+    /// torque acts on `body` (reaction on `on`), or its force along the guide of `on`.
+    /// The joint is found at validation.
+    pub fn drive_across(
+        &mut self,
+        body: u8,
+        on: u8,
+        motor: Motor<T>,
+    ) -> Result<&mut Self, ModelError> {
+        self.m
+            .drives
+            .push(Drive {
+                coord: Drive::<T>::ACROSS,
+                // Resolved by validation: the bodies until then.
+                group: body,
+                motor,
+                joint: Some(on),
             })
             .map_err(|_| ModelError::Capacity("drives"))?;
         Ok(self)
@@ -679,6 +718,15 @@ fn validate_drives_and_loads<T: Real>(m: &mut Model<T>, size: T) -> Result<(), M
         ..
     } = m;
     for d in drives.iter_mut() {
+        if let Some(on) = d.joint {
+            let (body, on) = (d.group, on);
+            let (g, j) = joint_between(groups, body, on).ok_or(ModelError::Coordinates(
+                "a drive across a joint names bodies that no revolute or prismatic joint of the group placing the first joins",
+            ))?;
+            (d.group, d.joint) = (g, Some(j));
+            d.motor.validate()?;
+            continue;
+        }
         if d.coord >= *dof {
             return Err(ModelError::Coordinates(
                 "a drive names a coordinate no motor element has",
@@ -708,6 +756,21 @@ fn validate_drives_and_loads<T: Real>(m: &mut Model<T>, size: T) -> Result<(), M
         }
     }
     Ok(())
+}
+
+/// The group that places link `body` and the index of its revolute or prismatic joint
+/// from `body` to `on`.
+fn joint_between<T: Real>(groups: &[Group<T>], body: u8, on: u8) -> Option<(u8, u8)> {
+    let (g, grp) = groups
+        .iter()
+        .enumerate()
+        .find(|(_, g)| g.links().any(|l| l == body))?;
+    let j = grp.joints.iter().position(|jt| {
+        jt.i == body
+            && jt.j == on
+            && matches!(jt.kind, JointKind::Revolute | JointKind::Prismatic { .. })
+    })?;
+    Some((g as u8, j as u8))
 }
 
 /// Every value of a built group is finite, or the name of the first that is not.

@@ -15,6 +15,9 @@ use crate::workspace::Workspace;
 use core::fmt;
 use nalgebra::SVector;
 
+pub mod singular;
+pub mod switch;
+
 /// Why a simulation could not be set up.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum SetupError {

@@ -57,6 +57,7 @@ pub use cli::main_with;
 pub use error::{RunError, UsageError, EXIT_FAILURE, EXIT_OK, EXIT_USAGE, HINT};
 pub use jobs::pool::{run_jobs, Progress};
 pub use jobs::{batch, sweep};
+pub use model::alternatives::alternatives as model_alternatives;
 pub use model::runfile::{parse_run_file, run_file_from_value, FileError, RunFile};
 pub use model::scenarios::{ScenarioId, Source};
 pub use model::{analysis, runfile, scenarios};

@@ -243,3 +243,52 @@ five-bar --out x.csv
     assert!(err.contains("--threads"), "{err}");
     assert!(!Path::new(&dir).exists());
 }
+
+/// An end at a singularity of the mechanism has one exit status, whichever scenario
+/// meets it (issue 17, item 4): `ccc-s1` (free mode, the diode rods in line at 0.324 s)
+/// and `ccc-s2 --load 0` (nothing holds the shaft: both diode branches stretched at
+/// 0.3238 s) both end "singularity" with exit 0, in the batch's table and alone (on the
+/// code before, `ccc-s2 --load 0` exited 1 with "step failed").
+#[test]
+fn an_end_at_a_singularity_has_one_exit_status() {
+    let tmp = TempDir::new("batch-singular");
+    let lines = [
+        vec!["ccc-s1", "--t-end", "0.4"],
+        vec!["ccc-s2", "--load", "0", "--t-end", "0.33"],
+    ];
+    let text: String = lines.iter().map(|l| l.join(" ") + "\n").collect();
+    let file = batch_file(&tmp, &text);
+    let dir = tmp.join("out");
+    let (code, _, err) = batch(&file, &dir, 1);
+    assert_eq!(code, 0, "{err}");
+    let table = String::from_utf8(read(&Path::new(&dir).join("batch.csv"))).expect("utf-8");
+    let col = |name: &str| {
+        TABLE_COLUMNS
+            .iter()
+            .position(|c| *c == name)
+            .expect("a column")
+    };
+    let rows: Vec<Vec<&str>> = table
+        .lines()
+        .skip(1)
+        .map(|r| r.splitn(TABLE_COLUMNS.len(), ',').collect())
+        .collect();
+    assert_eq!(rows.len(), 2);
+    for (args, row) in lines.iter().zip(&rows) {
+        assert_eq!(
+            (row[col("exit")], row[col("end")]),
+            ("0", "singularity"),
+            "{args:?}"
+        );
+        let alone = tmp.join("alone.csv");
+        let mut cmd = vec!["run"];
+        cmd.extend(args.iter().copied());
+        cmd.extend(["--out", &alone]);
+        let (code, out, err) = run(&cmd);
+        assert_eq!(code, 0, "{args:?}: {err}");
+        assert!(
+            format!("{out}{err}").contains("at the mechanism's singularity"),
+            "{args:?}: {out}{err}"
+        );
+    }
+}

@@ -602,6 +602,15 @@ fn deg<T: Real>(d: f64) -> T {
 
 /// Builds the core model of `m` on the sequence `a`, in scalar `T`.
 pub fn build_model<T: Real>(m: &Mechanism, a: &Analysis) -> Result<Model<T>, ModelError> {
+    build_model_with(m, a, |_| Ok(()))
+}
+
+/// [`build_model`] with `more` declared last (after the drives and loads).
+pub(crate) fn build_model_with<T: Real>(
+    m: &Mechanism,
+    a: &Analysis,
+    more: impl FnOnce(&mut ModelBuilder<T>) -> Result<(), ModelError>,
+) -> Result<Model<T>, ModelError> {
     let c = T::c;
     let mut b = ModelBuilder::<T>::new();
     b.gravity(Vec2::new(c(m.gravity[0]), c(m.gravity[1])));
@@ -835,6 +844,7 @@ pub fn build_model<T: Real>(m: &Mechanism, a: &Analysis) -> Result<Model<T>, Mod
             moment: c(l.moment),
         })?;
     }
+    more(&mut b)?;
     b.build()
 }
 

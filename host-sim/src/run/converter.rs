@@ -458,8 +458,10 @@ pub fn simulate<T: Real>(
         let r = twin.step(&inputs);
         step_wall += t0.elapsed();
         if let Err(error) = r {
-            // Free mode (S1) ends at the diode rods' singularity: its expected end.
-            let expected = !settings.clutch && error.at_singularity();
+            // An end at a singularity of the mechanism (S1's diode rods in line, or S2's
+            // without a load to hold the shaft) is where the machine stops, in either
+            // mode: one exit status for it in run, batch and sweep.
+            let expected = error.at_singularity();
             end = End::Stopped { error, expected };
             break;
         }

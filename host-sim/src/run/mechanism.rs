@@ -1,9 +1,10 @@
 //! The mechanism runner: steps a mechanism's [`Simulation`], tells the observers every
 //! state and written row, and gathers the summary.
 
-use super::columns::Layout;
+use super::columns::{Column, Layout};
 use super::interrupt;
 use super::progress::Progress;
+use super::switching::{SwitchRecord, Switching};
 use crate::error::{Fig, RunError, Sci};
 use crate::model::runfile::{Body, Integrator};
 use crate::options::{precision, RunOptions, Steps};
@@ -12,6 +13,7 @@ use crate::output::{Cell, Observer, State, Tables};
 use std::fmt;
 use std::time::{Duration, Instant};
 use structomat::integrator::{Adaptive, AdaptiveError, AdaptiveSettings};
+use structomat::simulation::singular::at_singularity;
 use structomat::structomat::GroupKind;
 use structomat::{Real, Simulation, StepError};
 
@@ -106,6 +108,8 @@ pub struct Summary {
     pub wall: Duration,
     /// Wall time inside `Simulation::step` only.
     pub step_wall: Duration,
+    /// The changes of independent coordinates at dead points of the drivers.
+    pub switches: Vec<SwitchRecord>,
 }
 
 impl Summary {
@@ -223,6 +227,20 @@ impl fmt::Display for Summary {
         for w in &self.warnings {
             writeln!(f, "warning   {w}")?;
         }
+        if !self.switches.is_empty() {
+            writeln!(
+                f,
+                "switches  {} changes of coordinates at dead points of the drivers (CSV: accelerations, torques and reactions NaN while another choice drives):",
+                self.switches.len()
+            )?;
+            for s in &self.switches {
+                writeln!(
+                    f,
+                    "          t = {:.6} s: {} -> {} ({} at {:.3e}, then {:.3e})",
+                    s.time, s.from, s.to, s.group, s.conditioning[0], s.conditioning[1]
+                )?;
+            }
+        }
         if let Some(r) = &self.max_reaction {
             writeln!(
                 f,
@@ -285,6 +303,12 @@ pub fn simulate<T: Real>(
         ),
         _ => None,
     };
+    // Coordinate switching at dead points: fixed steps only (the adaptive intervals
+    // are not metered, and their error control is not the switch's).
+    let mut switching = match adaptive {
+        None => Switching::new(opts, &sim).map_err(RunError::Setup)?,
+        Some(_) => None,
+    };
     let (mut accepted, mut rejected) = (0u64, 0u64);
     let model = sim.model().clone();
     let layout = Layout::new(&model);
@@ -322,23 +346,29 @@ pub fn simulate<T: Real>(
                 error,
             });
         }
+        let value = |c: Column| {
+            switching
+                .as_ref()
+                .and_then(|s| s.value(c, &sim))
+                .unwrap_or_else(|| Layout::value(c, &sim))
+        };
         for &k in &forces {
-            let v = Layout::value(layout.columns[k], &sim).to_f64();
+            let v = value(layout.columns[k]).to_f64();
+            if v.is_nan() {
+                continue;
+            }
             if max.is_none_or(|(_, m, _)| v > m) {
                 max = Some((k, v, sim.time().to_f64()));
             }
         }
         if steps >= first_averaged && from.is_none() {
-            from = Some((
-                sim.time().to_f64(),
-                sim.q().first().map_or(f64::NAN, |v| v.to_f64()),
-            ));
+            from = Some((sim.time().to_f64(), value(Column::Q(0)).to_f64()));
         }
         obs.on_state(State::Mechanism(&sim));
         let stop = interrupt::requested();
         // The last state is always written (`--every N` or not, stopped or not).
         if steps % every == 0 || steps == n || stop {
-            write_row(&layout, &sim, &mut row, obs)?;
+            write_row(&layout, &sim, &switching, &mut row, obs)?;
             rows += 1;
         }
         if steps == n || stop {
@@ -347,7 +377,10 @@ pub fn simulate<T: Real>(
         progress.tick(sim.time().to_f64());
         let t0 = Instant::now();
         let r = match adaptive.as_mut() {
-            None => sim.step().map_err(Failure::step),
+            None => match switching.as_mut() {
+                Some(s) => s.step(&mut sim).map_err(Failure::step),
+                None => sim.step().map_err(Failure::step),
+            },
             Some(a) => match sim.step_adaptive(a) {
                 Ok(stats) => {
                     accepted += u64::from(stats.accepted);
@@ -363,13 +396,13 @@ pub fn simulate<T: Real>(
             // The last good state's row, if `--every` skipped it (its kinetostatics
             // passed before the step).
             if steps % every != 0 && sim.kinetostatics().is_ok() {
-                write_row(&layout, &sim, &mut row, obs)?;
+                write_row(&layout, &sim, &switching, &mut row, obs)?;
                 rows += 1;
             }
-            break Err(failure);
+            break Err(failure.located(&sim));
         }
         steps += 1;
-        motors.check(&sim);
+        motors.check(&sim, &switching);
     };
     let wall = start.elapsed();
     progress.finish();
@@ -391,11 +424,19 @@ pub fn simulate<T: Real>(
         Err(Failure::Integrator(error)) => return Err(RunError::Integrator { steps, rows, error }),
     };
     let e1 = sim.energy();
+    // The first coordinates, also while another choice drives.
+    let at = |c: Column| {
+        switching
+            .as_ref()
+            .and_then(|s| s.value(c, &sim))
+            .unwrap_or_else(|| Layout::value(c, &sim))
+            .to_f64()
+    };
+    let (q_end, qd_end): (Vec<f64>, Vec<f64>) = (0..model.dof())
+        .map(|j| (at(Column::Q(j)), at(Column::Qd(j))))
+        .unzip();
     let mean_speed = from.filter(|_| model.dof() > 0).map(|(t0, q0)| {
-        let (t1, q1) = (
-            sim.time().to_f64(),
-            sim.q().first().map_or(f64::NAN, |v| v.to_f64()),
-        );
+        let (t1, q1) = (sim.time().to_f64(), at(Column::Q(0)));
         MeanSpeed {
             coord: 0,
             from: t0,
@@ -404,7 +445,7 @@ pub fn simulate<T: Real>(
             value: if t1 > t0 {
                 (q1 - q0) / (t1 - t0)
             } else {
-                sim.qd().first().map_or(f64::NAN, |v| v.to_f64())
+                at(Column::Qd(0))
             },
             angular,
         }
@@ -417,8 +458,8 @@ pub fn simulate<T: Real>(
         steps,
         time: sim.time().to_f64(),
         rows,
-        q: sim.q().iter().map(|v| v.to_f64()).collect(),
-        qd: sim.qd().iter().map(|v| v.to_f64()).collect(),
+        q: q_end,
+        qd: qd_end,
         mean_speed,
         energy_start,
         energy_end: (e1.kinetic.to_f64(), e1.potential.to_f64()),
@@ -443,6 +484,7 @@ pub fn simulate<T: Real>(
         adaptive: adaptive.map(|_| (accepted, rejected)),
         wall,
         step_wall,
+        switches: switching.map(|s| s.log).unwrap_or_default(),
     })
 }
 
@@ -451,16 +493,18 @@ pub fn simulate<T: Real>(
 fn write_row<T: Real>(
     layout: &Layout,
     sim: &Simulation<T>,
+    switching: &Option<Switching<T>>,
     row: &mut Vec<Cell<'_, T>>,
     obs: &mut dyn Observer<T>,
 ) -> Result<(), RunError> {
     row.clear();
-    row.extend(
-        layout
-            .columns
-            .iter()
-            .map(|c| Cell::Num(Layout::value(*c, sim))),
-    );
+    row.extend(layout.columns.iter().map(|c| {
+        let v = switching
+            .as_ref()
+            .and_then(|s| s.value(*c, sim))
+            .unwrap_or_else(|| Layout::value(*c, sim));
+        Cell::Num(v)
+    }));
     obs.on_row(row)
 }
 
@@ -503,9 +547,13 @@ impl MotorWatch {
     /// Warns, once per motor, when its speed at `sim`'s state has left its working zone
     /// (past the zone's ends by more than 1e-6 of its width: a motor settling at `ω_s`
     /// may overshoot it by rounding).
-    fn check<T: Real>(&mut self, sim: &Simulation<T>) {
+    fn check<T: Real>(&mut self, sim: &Simulation<T>, switching: &Option<Switching<T>>) {
+        // The drivers' own speeds: the first coordinates', also while another choice
+        // drives.
+        let first = switching.as_ref().map(|s| s.first_qd(sim));
+        let qd = first.as_ref().map_or(sim.qd(), |q| &q[..]);
         for (k, (lo, hi), warned) in self.zones.iter_mut() {
-            let w = sim.qd().get(*k).map_or(0.0, |v| v.to_f64());
+            let w = qd.get(*k).map_or(0.0, |v| v.to_f64());
             let slack = 1e-6 * (*hi - *lo).clamp(1.0, 1e6);
             if *warned || (*lo - slack..=*hi + slack).contains(&w) {
                 continue;
@@ -545,6 +593,25 @@ impl Failure {
         Failure::Step {
             kinetostatics: false,
             error,
+        }
+    }
+
+    /// A step's failure at a singularity of the mechanism with the time located inside
+    /// the step ([`Simulation::locate_failure`]); the others as they are.
+    fn located<T: Real>(self, sim: &Simulation<T>) -> Self {
+        match self {
+            Failure::Step {
+                kinetostatics: false,
+                error,
+            } if at_singularity(&error) => {
+                let mut scratch = Box::new(structomat::Workspace::new());
+                let error = match sim.locate_failure(&mut scratch) {
+                    Some(t) => error.at_time(t.to_f64()),
+                    None => error,
+                };
+                Failure::step(error)
+            }
+            f => f,
         }
     }
 }

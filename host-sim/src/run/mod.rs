@@ -10,6 +10,7 @@ pub mod converter;
 pub mod interrupt;
 pub mod mechanism;
 pub mod progress;
+pub mod switching;
 
 use crate::error::{report_run_error, temp_path, RunError, EXIT_INTERRUPTED, EXIT_OK};
 use crate::model::scenarios::Source;

@@ -1,0 +1,64 @@
+//! Where inside a step a run meets a singularity of the mechanism (issue 17, item 4):
+//! the constraints lose rank (a group cannot assemble past a limit position, its
+//! Jacobian is singular, the mass matrix is) somewhere inside the step that failed, not
+//! at its start. [`Simulation::locate_failure`] finds that time by bisection on the
+//! size of a trial step from the last good state, as the twin locates its events: the
+//! longest step that still succeeds ends where the mechanism stops.
+
+use super::{Equations, Simulation};
+use crate::config::STATE_DIM;
+use crate::error::{GroupFault, StepError};
+use crate::integrator::Dp5;
+use crate::scalar::Real;
+use crate::workspace::Workspace;
+
+/// Halvings of the step by [`Simulation::locate_failure`]: 2⁻⁴⁰ of the step (1e-15 s
+/// at h = 1 ms), finer than any time a run reports.
+pub const LOCATE_HALVINGS: u32 = 40;
+
+/// Whether a step failed as at a singularity of the mechanism (or of its coordinates):
+/// a group singular, unable to assemble, off its branch, unsolved or at a dead point,
+/// or the mass matrix singular. Non-finite inputs and broken energy balances are not.
+pub fn at_singularity(e: &StepError) -> bool {
+    match e {
+        StepError::Group { fault, .. } => !matches!(fault, GroupFault::NonFiniteInput),
+        StepError::SingularMassMatrix { .. } => true,
+        _ => false,
+    }
+}
+
+impl<T: Real> Simulation<T> {
+    /// The time inside the next step (from the current, last good state) at which a
+    /// step fails: the end of the longest trial DP5 step from the state that still
+    /// succeeds, found by [`LOCATE_HALVINGS`] bisections of the step size (the bracket's
+    /// failing end is returned, s). `None` if the whole step succeeds, or the state's
+    /// own evaluation fails. `scratch` is overwritten; the simulation is untouched.
+    pub fn locate_failure(&self, scratch: &mut Workspace<T>) -> Option<T> {
+        let t_next = T::c((self.steps + 1) as f64) * self.h;
+        let h = t_next - self.t;
+        let trial = |size: T, scratch: &mut Workspace<T>| -> bool {
+            scratch.clone_from(&self.ws);
+            let mut dp5 = Dp5::<T, STATE_DIM>::new();
+            let (mut t, mut y) = (self.t, self.y);
+            let mut sys = Equations {
+                model: &self.model,
+                ws: scratch,
+            };
+            dp5.step(&mut sys, &mut t, &mut y, size).is_ok()
+        };
+        if trial(h, scratch) {
+            return None;
+        }
+        let (mut lo, mut hi) = (T::zero(), h);
+        let half = T::c(0.5);
+        for _ in 0..LOCATE_HALVINGS {
+            let mid = (lo + hi) * half;
+            if trial(mid, scratch) {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        Some(self.t + hi)
+    }
+}
