@@ -33,39 +33,34 @@ pub struct S2Run {
     pub steps: u32,
 }
 
+/// S2's first second at the recommended f64 step, 1e-4 s.
+const S2_H1E4: S2Run = S2Run {
+    name: "s2-h1e-4",
+    h: 1e-4,
+    steps: 10_000,
+};
+
+/// S2's first second at the 1 kHz loop's step, 1e-3 s.
+const S2_H1E3: S2Run = S2Run {
+    name: "s2-h1e-3",
+    h: 1e-3,
+    steps: 1_000,
+};
+
 /// The f32 runs (Cortex-M4F): the recommended f32 step first (README, "In firmware":
-/// h = 2e-4 s), then 1e-4 s and the 1 kHz loop's 1e-3 s.
+/// h = 2e-4 s), then 1e-4 s and 1e-3 s.
 pub const RUNS_F32: [S2Run; 3] = [
     S2Run {
         name: "s2-h2e-4",
         h: 2e-4,
         steps: 5_000,
     },
-    S2Run {
-        name: "s2-h1e-4",
-        h: 1e-4,
-        steps: 10_000,
-    },
-    S2Run {
-        name: "s2-h1e-3",
-        h: 1e-3,
-        steps: 1_000,
-    },
+    S2_H1E4,
+    S2_H1E3,
 ];
 
 /// The f64 runs (Cortex-M7): the recommended f64 step (1e-4 s), then 1e-3 s.
-pub const RUNS_F64: [S2Run; 2] = [
-    S2Run {
-        name: "s2-h1e-4",
-        h: 1e-4,
-        steps: 10_000,
-    },
-    S2Run {
-        name: "s2-h1e-3",
-        h: 1e-3,
-        steps: 1_000,
-    },
-];
+pub const RUNS_F64: [S2Run; 2] = [S2_H1E4, S2_H1E3];
 
 /// The five-bar's steps: 0.5 s at its scenario's h = 1 ms.
 pub const FIVE_BAR_STEPS: u32 = 500;

@@ -1,5 +1,6 @@
-//! What the target binaries share: the board, semihosting (output and exit), SysTick as
-//! an instruction counter, stack painting, and the fault and panic handlers.
+//! What the target binaries share: the board, semihosting (output, command line and
+//! exit), SysTick as an instruction counter, stack painting, and the fault and panic
+//! handlers.
 //!
 //! Semihosting on ARMv7-M: `bkpt 0xab` with the operation in r0 and its argument in r1
 //! (ARM "Semihosting for AArch32 and AArch64", version 2). QEMU implements it with
@@ -8,7 +9,7 @@
 
 use core::arch::asm;
 use core::fmt::{self, Write};
-use cortex_m_rt::ExceptionFrame;
+use cortex_m_rt::{exception, ExceptionFrame};
 
 #[cfg(all(feature = "mps2-an386", not(feature = "mps2-an500")))]
 mod board {
@@ -270,9 +271,10 @@ pub mod stack {
     }
 }
 
-/// The HardFault handler's report: the faulting frame, then a failed exit (a fault would
+/// The HardFault handler: the faulting frame, then a failed exit (a fault would
 /// otherwise hang the emulation until its timeout).
-pub fn fault(frame: &ExceptionFrame) -> ! {
+#[exception]
+unsafe fn HardFault(frame: &ExceptionFrame) -> ! {
     let mut out = Out::new();
     out.line(format_args!(
         "HARDFAULT pc {:#010x} lr {:#010x} xpsr {:#010x}",
@@ -283,8 +285,9 @@ pub fn fault(frame: &ExceptionFrame) -> ! {
     exit(false)
 }
 
-/// The panic handler's report, then a failed exit.
-pub fn panicked(info: &core::panic::PanicInfo) -> ! {
+/// The panic handler: the message, then a failed exit.
+#[panic_handler]
+fn panicked(info: &core::panic::PanicInfo) -> ! {
     let mut out = Out::new();
     out.line(format_args!("PANIC {info}"));
     exit(false)

@@ -18,7 +18,7 @@
 
 use core::f64::consts::TAU;
 use core::mem::MaybeUninit;
-use cortex_m_rt::{entry, exception, ExceptionFrame};
+use cortex_m_rt::entry;
 use structomat::ccc::{CccParams, Inputs, MotorInput, Twin, TwinSettings};
 use structomat::motor::Motor;
 use structomat::Real;
@@ -179,14 +179,4 @@ fn main() -> ! {
     ));
     out.line(format_args!("done"));
     exit(true)
-}
-
-#[exception]
-unsafe fn HardFault(frame: &ExceptionFrame) -> ! {
-    target::fault(frame)
-}
-
-#[panic_handler]
-fn panic(info: &core::panic::PanicInfo) -> ! {
-    target::panicked(info)
 }

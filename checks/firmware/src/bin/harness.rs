@@ -19,7 +19,7 @@
 #![no_main]
 
 use core::mem::MaybeUninit;
-use cortex_m_rt::{entry, exception, ExceptionFrame};
+use cortex_m_rt::entry;
 use structomat::ccc::Twin;
 use structomat::Simulation;
 use structomat_firmware::{run_all, Counter, MAX_STEPS};
@@ -89,14 +89,4 @@ impl Counter for SysTick {
     fn stack(&mut self) -> usize {
         stack::used()
     }
-}
-
-#[exception]
-unsafe fn HardFault(frame: &ExceptionFrame) -> ! {
-    target::fault(frame)
-}
-
-#[panic_handler]
-fn panic(info: &core::panic::PanicInfo) -> ! {
-    target::panicked(info)
 }
