@@ -17,7 +17,7 @@
 
 use core::fmt::{self, Write};
 use core::mem::MaybeUninit;
-use structomat::ccc::{CccParams, Inputs, MotorInput, Twin, TwinError, TwinSettings};
+use structomat::ccc::{CccParams, Inputs, MotorInput, Twin, TwinSettings, TwinStepError};
 use structomat::motor::Motor;
 use structomat::{Real, Simulation};
 
@@ -413,7 +413,7 @@ pub fn run_s2<T: Real, C: Counter, W: Write>(
 /// The one call site of `Twin::step`, so that how the optimiser treats the step (what
 /// it inlines into it) does not change with the harness's other calls.
 #[inline(never)]
-pub fn step<T: Real>(twin: &mut Twin<T>, inputs: &Inputs<T>) -> Result<(), TwinError> {
+pub fn step<T: Real>(twin: &mut Twin<T>, inputs: &Inputs<T>) -> Result<(), TwinStepError> {
     twin.step(inputs)
 }
 
