@@ -88,7 +88,7 @@ const PINS: &[Pin<'static>] = &[
     Pin {
         args: "ccc-s2",
         exit: 0,
-        csv: "858a3bfc3f6c8b18f3e016a31f3594c88ef5f75696d3105f900fc5a3486741ed",
+        csv: "b61482e1b36786af89f225faf3b5ef24bc7618de4e72911dfcea07fa5fac4e1c",
         logs: Some((
             "105c7200613ececd96f718a1faadbc99e49eb27a5f0b880c0642393281df3d96",
             "8a6dc425ca8077eec2849c1b9bfc1411ff579062ea580786bbaa8d47321d8326",
@@ -97,7 +97,7 @@ const PINS: &[Pin<'static>] = &[
     Pin {
         args: "ccc-s2 --ccw",
         exit: 0,
-        csv: "03f219fc77130867215e7b50b407d3424fe1bea524d83f4964cb5af83faa7c88",
+        csv: "29917526f3e85270dc29a21742ee67af696bf37ec7465bf6d898c0ffd4de86db",
         logs: Some((
             "df4f92d991147c5ad472576bccad21ff380439e6ab35fc717130a86bd47e5f32",
             "f62a398f2f898fb8152c2632e6d7fafba5da7c2ffd2da93706153640823eac5b",
@@ -121,7 +121,7 @@ const PINS: &[Pin<'static>] = &[
     Pin {
         args: "ccc-s2 --f32",
         exit: 0,
-        csv: "8f343b511c98f19515604fe3236eb273970fe30c2ab66291e6116262718d879b",
+        csv: "8f6b295a8234b3761103a998e359f8ef40bc503a93e79b316d02aee4529d2e23",
         logs: Some((
             "ae8a0b022d34018417a0cc68b389270b6434a8ffc1447e5043b90d717e7489a1",
             "7993420613b636e4365eba947e283e5b503731fc986054d7d44d5731d9fb69a7",

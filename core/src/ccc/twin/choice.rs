@@ -11,8 +11,9 @@ use super::guards::{Event, EventKind};
 use super::impact::{constraint_rows, project, rows_mismatch};
 use super::inputs::Inputs;
 use super::settings::*;
+use super::slot::unwrap_near;
 use super::slot::{LinkState, QD, STATE};
-use super::{joint_gap, shaft_speed, Twin, Work};
+use super::{joint_gap, shaft_speed, shaft_turn, Twin, Work};
 use crate::scalar::Real;
 use nalgebra::{SMatrix, SVector};
 
@@ -63,6 +64,11 @@ impl<T: Real> Twin<T> {
             tol_w,
         };
         let pick = self.pick(w, &cands, &judge)?;
+        // The segment in `from` ends here (positions are continuous through an event).
+        w.shaft_turn += shaft_turn(from, &links, &w.segment_levers);
+        for (s, lever) in w.segment_levers.iter_mut().zip([6, 8]) {
+            *s = unwrap_near(links[lever].theta, *s);
+        }
         self.take_pick(w, kind, from, &links, pick, inputs)
     }
 

@@ -151,6 +151,13 @@ struct Work<T: Real> {
     /// The mode choice took a mode in this step, and with it the coordinate choice
     /// [`Twin::try_candidate`] found best at the event.
     chosen: bool,
+    /// The shaft's rotation over the step's segments before the present one (between
+    /// the step's start and events), rad: the engaged lever's rotation in each segment
+    /// whose mode turns the shaft, by the mode of that segment.
+    shaft_turn: T,
+    /// Levers 6 and 8's angles at the present segment's start, rad (unwrapped against
+    /// the last committed ones).
+    segment_levers: [T; 2],
 }
 
 impl<T: Real> Twin<T> {
@@ -331,6 +338,8 @@ impl<T: Real> Twin<T> {
             impact: T::zero(),
             switched: false,
             chosen: false,
+            shaft_turn: T::zero(),
+            segment_levers: [self.links[6].theta, self.links[8].theta],
         }
     }
 
@@ -527,14 +536,8 @@ impl<T: Real> Twin<T> {
         for (l, last) in links.iter_mut().zip(self.links.iter()).skip(1) {
             l.theta = unwrap_near(l.theta, last.theta);
         }
-        if self.slots.cur().mode.shaft_turning() {
-            let lever = if self.slots.cur().mode.clutches()[0] == Clutch::Engaged {
-                6
-            } else {
-                8
-            };
-            self.shaft_angle += links[lever].theta - self.links[lever].theta;
-        }
+        let end = shaft_turn(self.slots.cur().mode, &links, &w.segment_levers);
+        self.shaft_angle += w.shaft_turn + end;
         self.links = links;
         self.joints = self.slots.cur().joint_reactions(&self.params, &links);
         self.audit = audit;
@@ -570,6 +573,21 @@ fn load_state<T: Real>(slot: &Slot<T>, q: &[T; 2], omega: &[T; 9], y: &mut SVect
             T::zero()
         };
     }
+}
+
+/// The shaft's rotation since a segment's start (levers 6 and 8 at `start`, rad) to
+/// the physical state `links`, in `mode`: the engaged lever's rotation if `mode` turns
+/// the shaft (the lever turns with it), else 0, rad.
+fn shaft_turn<T: Real>(mode: Mode, links: &[LinkState<T>; 9], start: &[T; 2]) -> T {
+    if !mode.shaft_turning() {
+        return T::zero();
+    }
+    let (k, lever) = if mode.clutches()[0] == Clutch::Engaged {
+        (0, 6)
+    } else {
+        (1, 8)
+    };
+    unwrap_near(links[lever].theta, start[k]) - start[k]
 }
 
 /// Shaft speed, rad/s CCW: the engaged lever's in an A mode, 0 otherwise.
