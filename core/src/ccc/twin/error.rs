@@ -127,6 +127,11 @@ pub enum TwinStepError {
         closing_in: [f64; 2],
         /// Rod plus lever of each branch, m (the stretched reach).
         stretched_reach: [f64; 2],
+        /// Time at which the first branch named in line comes in line, s, located
+        /// inside the failing step: `time` plus the least `closing_in` of the branches
+        /// in line (the rod-lever angle closes at a finite rate while |DH| touches its
+        /// limit); `time` if none closes at its rate.
+        at: f64,
     },
     /// A turning shaft with J_s > 0 would leave both levers and coast: not modelled.
     Coasting {
@@ -281,13 +286,14 @@ impl TwinStepError {
             stretched_reach,
             in_line,
             closing_in,
+            at,
         } = self
         else {
             return Ok(());
         };
         write!(
             f,
-            "t = {time:.6} s: mode {mode}: a singularity of the mechanism: the diode's rods and levers in line, "
+            "t = {time:.6} s: mode {mode}: a singularity of the mechanism at t = {at:.7} s (located inside the step): the diode's rods and levers in line, "
         )?;
         let mut first = true;
         for (k, (rod, lever)) in BRANCHES.into_iter().enumerate() {
@@ -379,7 +385,18 @@ impl<T: Real> Twin<T> {
         if !in_line.iter().any(|b| *b) {
             return None;
         }
+        // The rod-lever angle passes zero at a finite rate (the levers' speeds stay
+        // finite while |DH| touches its limit like the square of the time left): its
+        // sine's linear extrapolation locates the in-line pose, exact to second order.
+        let at = self.t.to_f64()
+            + closing_in
+                .iter()
+                .zip(&in_line)
+                .filter(|(c, il)| **il && c.is_finite())
+                .fold(f64::INFINITY, |m, (c, _)| m.min(*c));
+        let at = if at.is_finite() { at } else { self.t.to_f64() };
         Some(TwinStepError::Diode {
+            at,
             time: self.t.to_f64(),
             mode: self.slots.cur().mode,
             reach: reach.to_f64(),
