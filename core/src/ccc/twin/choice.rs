@@ -66,8 +66,8 @@ impl<T: Real> Twin<T> {
         let pick = self.pick(w, &cands, &judge)?;
         // The segment in `from` ends here (positions are continuous through an event).
         w.shaft_turn += shaft_turn(from, &links, &w.segment_levers);
-        for (s, lever) in w.segment_levers.iter_mut().zip([6, 8]) {
-            *s = unwrap_near(links[lever].theta, *s);
+        for (s, lever) in w.segment_levers.iter_mut().zip([&links[6], &links[8]]) {
+            *s = unwrap_near(lever.theta, *s);
         }
         self.take_pick(w, kind, from, &links, pick, inputs)
     }
