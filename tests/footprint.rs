@@ -12,7 +12,7 @@
 //! and its budgets below are correspondingly looser.
 
 use std::hint::black_box;
-use std::mem::size_of;
+use std::mem::{size_of, MaybeUninit};
 use structomat::ccc::{CccParams, Inputs, MotorInput, Twin, TwinSettings};
 use structomat::mechanisms::{five_bar, slider_crank};
 use structomat::model::Model;
@@ -160,6 +160,46 @@ fn stack_of_a_twin_step() {
     assert!(f32_used < budget32, "f32: {f32_used} B of stack");
     // f32 halves every buffer: its frames cannot be larger than f64's.
     assert!(f32_used <= f64_used, "f32 {f32_used} B > f64 {f64_used} B");
+}
+
+/// The stack of construction: [`Twin::new_in`] builds the twin where it lives, with no
+/// slot, model or workspace on the stack (at most a group's data, 1.2 KB in f64, and
+/// the frames of the first mode choice, which are a step's); [`Twin::new`] by value
+/// needs several times the twin's size.
+#[test]
+fn stack_of_construction_in_place() {
+    fn build<T: Real>(place: &mut MaybeUninit<Twin<T>>) -> u64 {
+        let twin = Twin::new_in(
+            place,
+            CccParams::<T>::reference(),
+            TwinSettings::reference(T::c(1e-4)),
+            s2_inputs(),
+        )
+        .expect("the reference converter builds in place");
+        twin.steps()
+    }
+    let depth = if cfg!(debug_assertions) { 4096 } else { 512 } * KIB;
+    let mut place64 = Box::new(MaybeUninit::<Twin<f64>>::uninit());
+    let (f64_used, _) = measure_stack(depth, || build(&mut place64));
+    let mut place32 = Box::new(MaybeUninit::<Twin<f32>>::uninit());
+    let (f32_used, _) = measure_stack(depth, || build(&mut place32));
+    let (by_value, _) = measure_stack(depth, || {
+        Twin::new(
+            CccParams::<f64>::reference(),
+            TwinSettings::reference(1e-4),
+            s2_inputs(),
+        )
+        .expect("the reference converter builds")
+        .steps()
+    });
+    println!("stack of construction: in place f64 {f64_used} B, f32 {f32_used} B; by value f64 {by_value} B");
+    // In place it is a step's stack (the first mode choice is one), under the budgets of
+    // `stack_of_a_twin_step`; by value it holds at least the twin itself.
+    let budget = if cfg!(debug_assertions) { 128 } else { 24 } * KIB;
+    assert!(f64_used < budget, "f64 in place: {f64_used} B of stack");
+    let budget32 = if cfg!(debug_assertions) { 96 } else { 12 } * KIB;
+    assert!(f32_used < budget32, "f32 in place: {f32_used} B of stack");
+    assert!(by_value >= size_of::<Twin<f64>>(), "by value: {by_value} B");
 }
 
 /// The stack high-water of the generic core's step: 1000 DP5 steps and the kinetostatics

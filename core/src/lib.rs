@@ -65,6 +65,7 @@ pub mod ccc;
 pub mod config;
 pub mod dynamics;
 pub mod error;
+mod in_place;
 pub mod integrator;
 pub mod kinematics;
 pub mod kinetostatics;

@@ -18,7 +18,9 @@ use crate::structomat::{
 };
 use core::fmt;
 use core::marker::PhantomData;
+use core::mem::MaybeUninit;
 use core::ops::{Deref, DerefMut};
+use core::ptr::addr_of_mut;
 
 /// A rigid link: mass properties and the points where joints sit, in its own frame.
 ///
@@ -175,6 +177,50 @@ impl<T: Real> Clone for Model<T> {
         self.singular_tol = source.singular_tol;
         self.newton_tol = source.newton_tol;
     }
+}
+
+impl<T: Real> Model<T> {
+    /// Initialises `place` in place as an empty model, the one [`ModelBuilder::new`]
+    /// starts from (no links, gravity `(0, -9.81)` m/s²): nothing on the stack but the
+    /// small fields (a model is 16 KB in f64). Not a valid model to evaluate until
+    /// rebuilt ([`ModelBuilder::in_place`]).
+    pub(crate) fn init_empty(place: &mut MaybeUninit<Self>) -> &mut Self {
+        let p = place.as_mut_ptr();
+        // SAFETY: every field of `*p` is written once through a raw pointer to it (no
+        // reference to an uninitialised field is made; `fields_of` below fails to
+        // compile if a field is added and not listed there), so `*p` is initialised
+        // before `assume_init_mut`. A heapless vector's `new` leaves its buffer
+        // uninitialised: only its length is stored.
+        unsafe {
+            addr_of_mut!((*p).ground).write(heapless::Vec::new());
+            addr_of_mut!((*p).links).write(heapless::Vec::new());
+            addr_of_mut!((*p).groups).write(heapless::Vec::new());
+            addr_of_mut!((*p).drives).write(heapless::Vec::new());
+            addr_of_mut!((*p).loads).write(heapless::Vec::new());
+            addr_of_mut!((*p).gravity).write(default_gravity());
+            addr_of_mut!((*p).dof).write(0);
+            addr_of_mut!((*p).singular_tol).write(default_singular_tol());
+            addr_of_mut!((*p).newton_tol).write(T::zero());
+            place.assume_init_mut()
+        }
+    }
+}
+
+/// The fields [`Model::init_empty`] writes: a field added to [`Model`] and not there
+/// fails to compile here.
+#[allow(dead_code)]
+fn fields_of<T: Real>(m: &Model<T>) {
+    let Model {
+        ground: _,
+        links: _,
+        groups: _,
+        drives: _,
+        loads: _,
+        gravity: _,
+        dof: _,
+        singular_tol: _,
+        newton_tol: _,
+    } = m;
 }
 
 /// `dst` becomes a copy of `src`, element by element (the same capacity: every push fits).

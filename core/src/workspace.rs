@@ -5,8 +5,11 @@
 use crate::config::{
     MAX_BODIES, MAX_DOF, MAX_DRIVES, MAX_GROUPS, MAX_GROUP_JOINTS, MAX_GROUP_VARS, POSE_ROWS,
 };
+use crate::in_place::{elements, uninit};
 use crate::scalar::{Real, Vec2};
 use crate::structomat::GroupData;
+use core::mem::MaybeUninit;
+use core::ptr::addr_of_mut;
 use nalgebra::{SMatrix, SVector};
 
 /// Pose and motion of one body: `P = o + R(θ)p` for its point `p`. The default is a
@@ -152,6 +155,28 @@ impl<T: Real> Clone for Workspace<T> {
     }
 }
 
+/// The fields [`Workspace::init`] writes: a field added to [`Workspace`] and not there
+/// fails to compile here.
+#[allow(dead_code)]
+fn fields_of<T: Real>(w: &Workspace<T>) {
+    let Workspace {
+        body: _,
+        group: _,
+        q: _,
+        qd: _,
+        qdd: _,
+        v: _,
+        a_bias: _,
+        force: _,
+        mass_q: _,
+        gen_force: _,
+        motor: _,
+        applied_moment: _,
+        reactions: _,
+        evaluations: _,
+    } = w;
+}
+
 impl<T: Real> Default for Workspace<T> {
     fn default() -> Self {
         Self::new()
@@ -176,6 +201,41 @@ impl<T: Real> Workspace<T> {
             applied_moment: [T::zero(); MAX_BODIES],
             reactions: [[Reaction::default(); MAX_GROUP_JOINTS]; MAX_GROUPS],
             evaluations: 0,
+        }
+    }
+
+    /// Initialises `place` in place as [`Workspace::new`]'s zeroed workspace: nothing
+    /// larger than one group's data (1.2 KB in f64) on the stack, where `new` builds the
+    /// whole workspace (13.6 KB in f64) and moves it. For a workspace in a `static` or
+    /// inside a larger value built in place (the twin's slots).
+    pub fn init(place: &mut MaybeUninit<Self>) -> &mut Self {
+        let p = place.as_mut_ptr();
+        // SAFETY: every field of `*p` is written once through a raw pointer to it (no
+        // reference to an uninitialised field is made; `fields_of` below fails to
+        // compile if a field is added and not listed there), the arrays element by
+        // element, so `*p` is initialised before `assume_init_mut`.
+        unsafe {
+            for b in elements(uninit(addr_of_mut!((*p).body))) {
+                b.write(BodyState::default());
+            }
+            for g in elements(uninit(addr_of_mut!((*p).group))) {
+                g.write(GroupData::default());
+            }
+            addr_of_mut!((*p).q).write([T::zero(); MAX_DOF]);
+            addr_of_mut!((*p).qd).write([T::zero(); MAX_DOF]);
+            addr_of_mut!((*p).qdd).write([T::zero(); MAX_DOF]);
+            addr_of_mut!((*p).v).write(SMatrix::zeros());
+            addr_of_mut!((*p).a_bias).write(SVector::zeros());
+            addr_of_mut!((*p).force).write(SVector::zeros());
+            addr_of_mut!((*p).mass_q).write(SMatrix::identity());
+            addr_of_mut!((*p).gen_force).write(SVector::zeros());
+            addr_of_mut!((*p).motor).write([T::zero(); MAX_DRIVES]);
+            addr_of_mut!((*p).applied_moment).write([T::zero(); MAX_BODIES]);
+            for r in elements(uninit(addr_of_mut!((*p).reactions))) {
+                r.write([Reaction::default(); MAX_GROUP_JOINTS]);
+            }
+            addr_of_mut!((*p).evaluations).write(0);
+            place.assume_init_mut()
         }
     }
 

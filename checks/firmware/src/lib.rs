@@ -280,9 +280,9 @@ pub struct Failed;
 /// `perturbed` raises S2's load by its last bits (a factor 1 + ε, 2 ulps of 800 N·m):
 /// the check that a digest sees the least change of an input.
 ///
-/// `Twin::new` returns the twin by value: it is moved into its slot here (the core has
-/// no in-place constructor yet), so construction needs the twin's size of stack twice
-/// over; the counts of `new` include that move.
+/// Each twin is built where it lives, in `twin_slot` (`Twin::new_in`): no twin, slot,
+/// model or workspace on the stack; the `stack new` record is what that construction
+/// needs.
 pub fn run_all<T: Real, C: Counter, W: Write>(
     twin_slot: &mut MaybeUninit<Twin<T>>,
     sim_slot: &mut MaybeUninit<Simulation<T>>,
@@ -292,8 +292,7 @@ pub fn run_all<T: Real, C: Counter, W: Write>(
     runs: &[S2Run],
     perturbed: bool,
 ) -> Result<(), Failed> {
-    // Painted here, the stack of construction counts the frame of the run too, which
-    // holds the by-value result of `new`.
+    // Painted here, the stack of construction counts the frame of the run too.
     for run in runs {
         counter.paint();
         run_s2(twin_slot, counts, counter, out, run, perturbed)?;
@@ -329,13 +328,14 @@ pub fn run_s2<T: Real, C: Counter, W: Write>(
         inputs.load *= T::one() + T::EPS;
     }
     counter.start();
-    let built = Twin::new(
+    let built = Twin::new_in(
+        twin_slot,
         CccParams::reference(),
         TwinSettings::reference(T::c(run.h)),
         inputs,
     );
     let twin = match built {
-        Ok(t) => twin_slot.write(t),
+        Ok(t) => t,
         Err(e) => {
             record!(out, "{name} error new: {e}");
             return Err(Failed);

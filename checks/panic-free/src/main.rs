@@ -12,14 +12,16 @@
 //! parameters, inputs and measured values, including NaN and infinities.
 //!
 //! What is checked, for `f64` and `f32`:
-//! - [`Twin::new`] with arbitrary parameters and settings, [`Twin::step`] with arbitrary
-//!   inputs, and the twin's output accessors;
+//! - [`Twin::new_in`] (and [`Twin::new`], feature `twin-by-value`) with arbitrary
+//!   parameters and settings, [`Twin::step`] with arbitrary inputs, and the twin's
+//!   output accessors;
 //! - the generic core: building the thesis's five-bar, [`Simulation::step`] and the
 //!   kinetostatics.
 #![no_std]
 #![no_main]
 
 use core::hint::black_box;
+use core::mem::MaybeUninit;
 use core::panic::PanicInfo;
 use structomat::ccc::{CccParams, Inputs, MotorInput, Twin, TwinSettings};
 use structomat::motor::Motor;
@@ -62,9 +64,20 @@ fn twin<T: Real>(steps: u32) -> T {
         load: T::c(800.0),
         measured: None,
     };
-    let mut twin = match Twin::new(params, settings, black_box(inputs)) {
-        Ok(t) => t,
-        Err(_) => return T::zero(),
+    // Built in place, as firmware builds it (in a static there; here the binary only
+    // links); `Twin::new` by value too with the feature `twin-by-value`.
+    let mut by_value = None;
+    let mut place = MaybeUninit::uninit();
+    let twin = if cfg!(feature = "twin-by-value") && black_box(steps) % 2 == 1 {
+        match Twin::new(params, settings, black_box(inputs)) {
+            Ok(t) => by_value.insert(t),
+            Err(_) => return T::zero(),
+        }
+    } else {
+        match Twin::new_in(&mut place, params, settings, black_box(inputs)) {
+            Ok(t) => t,
+            Err(_) => return T::zero(),
+        }
     };
     let mut sum = T::zero();
     for _ in 0..black_box(steps) {

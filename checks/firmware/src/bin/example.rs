@@ -106,17 +106,16 @@ fn main() -> ! {
         load: R::c(LOAD),
         measured: None,
     };
-    // Built by value and moved into the statics: the stack must hold a twin's size
-    // twice over for the moment (see the harness).
-    let twin = match Twin::new(CccParams::reference(), settings, start) {
-        Ok(t) => TWIN.write(t),
+    // Each twin built where it lives, in its static: no twin on the stack.
+    let twin = match Twin::new_in(TWIN, CccParams::reference(), settings, start) {
+        Ok(t) => t,
         Err(e) => {
             out.line(format_args!("twin: {e}"));
             exit(false)
         }
     };
-    let plant = match Twin::new(CccParams::reference(), settings, Machine::inputs()) {
-        Ok(t) => PLANT.write(t),
+    let plant = match Twin::new_in(PLANT, CccParams::reference(), settings, Machine::inputs()) {
+        Ok(t) => t,
         Err(e) => {
             out.line(format_args!("machine: {e}"));
             exit(false)

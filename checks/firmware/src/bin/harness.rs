@@ -7,9 +7,9 @@
 //! (one instruction a nanosecond of virtual time), on the processor clock; the record
 //! `calibrate` measures how many instructions a SysTick tick is with a loop of known
 //! length. The stack is measured by painting: each run's `stack` record gives the
-//! deepest use during construction (below the frame that calls the run: the run's own
-//! frame, which holds `new`'s by-value result, included) and during the steps (below
-//! the run's frame: what `step` itself needs).
+//! deepest use during construction (`Twin::new_in` into the static; below the frame
+//! that calls the run, the run's own frame included) and during the steps (below the
+//! run's frame: what `step` itself needs).
 //!
 //! The command line (`qemu -append`) selects a canary instead: `fault` (an undefined
 //! instruction: the HardFault handler must exit with failure), `panic`, `hang` (only the

@@ -2,7 +2,8 @@
 //! events located inside the step from the dense output, the new mode chosen by SPEC 3's
 //! consistency conditions, plastic impacts, and coordinate switches at dead points.
 //!
-//! The rooms, one idea each: the step itself ([`Twin::step`], here); its settings,
+//! The rooms, one idea each: the step itself ([`Twin::step`], here); the twin's
+//! construction, by value or in place (`construction.rs`); its settings,
 //! bounds and thresholds (`settings.rs`); its inputs (`inputs.rs`) and what it reports
 //! (`outputs.rs`); its errors (`error.rs`); the event functions (`guards.rs`) and their
 //! location inside a step (`locate.rs`); the mode choice at an event (`choice.rs`),
@@ -19,6 +20,7 @@ mod audit;
 mod candidate;
 mod choice;
 mod consistency;
+mod construction;
 mod coordinates;
 mod error;
 mod evaluate;
@@ -42,20 +44,16 @@ pub use settings::{
 };
 pub use slot::{LinkState, JOINTS, JOINT_NAMES};
 
-use super::build::{initial_pose, CRANK};
 use super::mode::{Clutch, Mode};
 use super::params::CccParams;
 use crate::error::StepError;
 use crate::integrator::Dp5;
 use crate::scalar::{Real, Vec2};
 use crate::workspace::WarmStart;
-use audit::audit_finite;
-use coordinates::best_slot;
 use evaluate::{Stage, TorqueSource, Torques};
 use guards::Guards;
 use inputs::{check_inputs, same_inputs};
 use nalgebra::SVector;
-use settings::check_settings;
 use slot::{unwrap_near, Equations, Slot, QD, STATE};
 use slots::Slots;
 
@@ -89,12 +87,10 @@ use slots::Slots;
 /// h = 5e-5 s); h = 2e-4 s is the recommended f32 step (the largest with no step
 /// redone in sub-steps on S2, half the work of 1e-4 s).
 ///
-/// **In firmware** the twin is far too large for a stack: place it in a `static`, e.g.
-/// a `static TWIN: Mutex<RefCell<Option<Twin<f32>>>>` (`critical-section`'s or
-/// `cortex-m`'s `Mutex`) borrowed inside a critical section, or a `static mut` reached
-/// only from one context. [`Twin::new`] returns the twin by value, so building it
-/// needs its size of stack once: do it at start-up, before the control loop, and
-/// move it into the static; then call [`Twin::step`] on the static's twin only.
+/// **In firmware** the twin is far too large for a stack: it lives in a `static` and is
+/// built there by [`Twin::new_in`], which initialises it in place (construction needs
+/// 3.5 KiB of stack on a Cortex-M4F in f32, where [`Twin::new`], which returns it by
+/// value, needs 219 KiB). Only [`Twin::step`] and the outputs are called after that.
 ///
 /// # Example
 ///
@@ -107,6 +103,66 @@ use slots::Slots;
 ///     twin.step(&inputs).expect("a step of S2's start");
 /// }
 /// assert_eq!(twin.steps(), 10);
+/// ```
+///
+/// # Firmware
+///
+/// The core of the repository's `checks/firmware/src/bin/example.rs` (a `no_std` binary
+/// that runs it on an emulated Cortex-M4F): the twin in a `static`, built in place, and
+/// a 1 kHz loop that reads the crank's encoder and the motor's torque sensor, steps the
+/// twin with them and reads its mode and the measurement residual. The board's
+/// functions are stubs here.
+///
+/// ```no_run
+/// use core::f32::consts::TAU;
+/// use core::mem::MaybeUninit;
+/// use structomat::ccc::{CccParams, Inputs, MotorInput, Twin, TwinSettings};
+///
+/// /// The twin's home: a static in `.bss`, never the stack. (cortex-m-rt's `#[entry]`
+/// /// hands `main` its `static mut`s as `&'static mut`: the example does that.)
+/// static mut TWIN: MaybeUninit<Twin<f32>> = MaybeUninit::uninit();
+///
+/// /// The loop's period, s: the twin's step.
+/// const PERIOD: f32 = 1e-3;
+/// /// Encoder counts per crank revolution.
+/// const COUNTS_PER_REV: f32 = 4096.0;
+/// /// The shaft's load, N·m.
+/// const LOAD: f32 = 800.0;
+/// # fn wait_for_tick() {}
+/// # fn read_encoder() -> i32 { 0 }
+/// # fn read_torque_sensor() -> f32 { 12.0 }
+/// # fn report(_mode: &str, _angle_residual: f32, _speed_residual: f32) {}
+/// # fn report_refused(_e: &structomat::ccc::TwinStepError) {}
+///
+/// fn main() {
+///     // SAFETY: the one reference to TWIN, taken once by the one context that uses it.
+///     let place = unsafe { &mut *core::ptr::addr_of_mut!(TWIN) };
+///     let start = Inputs { motor: MotorInput::Torque(12.0), load: LOAD, measured: None };
+///     let settings = TwinSettings::reference(PERIOD);
+///     let Ok(twin) = Twin::new_in(place, CccParams::reference(), settings, start) else {
+///         panic!("the converter does not assemble");
+///     };
+///     let zero = twin.link(1).theta;
+///     let mut last = read_encoder();
+///     loop {
+///         wait_for_tick();
+///         let count = read_encoder();
+///         let angle = zero + count as f32 / COUNTS_PER_REV * TAU;
+///         let speed = (count - last) as f32 / COUNTS_PER_REV * TAU / PERIOD;
+///         last = count;
+///         let inputs = Inputs {
+///             motor: MotorInput::Torque(read_torque_sensor()),
+///             load: LOAD,
+///             measured: Some((angle, speed)),
+///         };
+///         // A refused step (a bad reading) keeps the twin's last good state.
+///         if let Err(e) = twin.step(&inputs) {
+///             report_refused(&e);
+///         }
+///         let (da, dw) = twin.measurement_residual().unwrap_or((0.0, 0.0));
+///         report(twin.mode().name(), da, dw);
+///     }
+/// }
 /// ```
 #[derive(Clone, Debug)]
 pub struct Twin<T: Real> {
@@ -161,100 +217,6 @@ struct Work<T: Real> {
 }
 
 impl<T: Real> Twin<T> {
-    /// A twin of `params` from `settings`' initial state, its first mode chosen by the
-    /// consistency conditions under `inputs`.
-    pub fn new(
-        params: CccParams<T>,
-        settings: TwinSettings<T>,
-        inputs: Inputs<T>,
-    ) -> Result<Self, TwinSetupError> {
-        params.validate()?;
-        check_settings(&settings)?;
-        check_inputs(&inputs, T::zero())?;
-        let pose = initial_pose(&params, settings.crank, settings.swing).ok_or(
-            TwinSetupError::Assembly {
-                crank: settings.crank.to_f64(),
-                swing: settings.swing.to_f64(),
-            },
-        )?;
-        let mode = if settings.clutch {
-            Mode::I0
-        } else {
-            Mode::Free
-        };
-        let (mut slot, mut spare) = (Slot::empty(), Slot::empty());
-        let q = best_slot(
-            &params,
-            mode,
-            &pose,
-            0.0,
-            settings.switch_below,
-            &mut slot,
-            &mut spare,
-        )?;
-        let mut y = SVector::<T, STATE>::zeros();
-        // Initial link speeds: those of the crank and the swing link (the others follow
-        // from the kinematics; the first choice of a 2-DOF mode is crank + swing link).
-        let mut omega = [T::zero(); 9];
-        omega[CRANK] = settings.crank_speed;
-        omega[4] = settings.swing_speed;
-        load_state(&slot, &q, &omega, &mut y);
-        if y.iter().any(|v| !v.finite()) {
-            return Err(TwinSetupError::InitialState);
-        }
-        let mut twin = Twin {
-            drive: params.drive.sign(),
-            params,
-            settings,
-            reference: slot.clone(),
-            slots: Slots {
-                s: [slot.clone(), slot, spare],
-                role: [0, 1, 2],
-            },
-            dp5: Dp5::new(),
-            y,
-            t: T::zero(),
-            steps: 0,
-            inputs,
-            links: [LinkState::default(); 9],
-            shaft_angle: T::zero(),
-            c: [T::zero(); 2],
-            joints: [Vec2::zeros(); 11],
-            guards: Guards::NONE,
-            guard_rates: Guards::NONE,
-            last_guards: None,
-            audit: Audit::default(),
-            events: heapless::Vec::new(),
-            switches: heapless::Vec::new(),
-            candidates: heapless::Vec::new(),
-            torque_source: TorqueSource::Kinetostatics,
-        };
-        for (p, l) in twin.links.iter_mut().enumerate() {
-            l.theta = pose[p];
-        }
-        twin.start(&inputs)?;
-        Ok(twin)
-    }
-
-    /// The start at the initial state: its first evaluation, with the diode its first
-    /// mode chosen by the consistency conditions, and the audit's initial energy.
-    fn start(&mut self, inputs: &Inputs<T>) -> Result<(), TwinStepError> {
-        let mut w = self.work_from_state();
-        self.restart_at(&w, inputs)?;
-        if self.settings.clutch {
-            self.choose(&mut w, EventKind::Start, inputs)?;
-        }
-        self.settle_clutch_torques(&w, inputs)?;
-        self.y = w.y;
-        let links = self.slots.cur().links(&self.params);
-        let audit = self.audit_of(&links, &w);
-        audit_finite(&audit, w.t)?;
-        self.commit(&w, audit, links);
-        let (k, u) = (self.audit.kinetic, self.audit.potential);
-        self.audit.initial = k + u;
-        Ok(())
-    }
-
     /// One step of `h` under `inputs` (held over the step). On error the twin keeps the
     /// state of the last good step, including what it reports of that step (events,
     /// coordinate switches, the candidates of the last mode choice).

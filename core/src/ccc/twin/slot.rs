@@ -9,6 +9,7 @@ use super::error::TwinStepError;
 use super::inputs::Inputs;
 use crate::dynamics::solve_accelerations;
 use crate::error::{GroupId, StepError};
+use crate::in_place::uninit;
 use crate::integrator::OdeSystem;
 use crate::kinematics::assemble;
 use crate::kinematics::{group_id, position};
@@ -18,6 +19,8 @@ use crate::structomat::GroupKind;
 use crate::structomat::JointKind;
 use crate::transmission::{evaluate, evaluate_velocities};
 use crate::workspace::Workspace;
+use core::mem::MaybeUninit;
+use core::ptr::addr_of_mut;
 use nalgebra::SVector;
 
 /// Length of the integrated state: `[q (2 slots), q̇ (2 slots), W_motor, W_load]`. The
@@ -82,6 +85,20 @@ impl<T: Real> Clone for Slot<T> {
     }
 }
 
+/// The fields [`Slot::init_empty`] writes: a field added to [`Slot`] and not there fails
+/// to compile here.
+#[allow(dead_code)]
+fn fields_of<T: Real>(s: &Slot<T>) {
+    let Slot {
+        model: _,
+        map: _,
+        ws: _,
+        mode: _,
+        coords: _,
+        built: _,
+    } = s;
+}
+
 impl<T: Real> Slot<T> {
     /// A slot to build into: an empty model (no links), not assembled.
     pub fn empty() -> Self {
@@ -92,6 +109,26 @@ impl<T: Real> Slot<T> {
             mode: Mode::Free,
             coords: Coordinates::CrankSwing,
             built: false,
+        }
+    }
+
+    /// [`Slot::empty`] initialised in place (a slot is 30 KB in f64): the model and the
+    /// workspace by their own in-place constructors.
+    pub fn init_empty(place: &mut MaybeUninit<Self>) -> &mut Self {
+        let p = place.as_mut_ptr();
+        // SAFETY: every field of `*p` is written once through a raw pointer to it (no
+        // reference to an uninitialised field is made; `fields_of` below fails to
+        // compile if a field is added and not listed there), so `*p` is initialised
+        // before `assume_init_mut`. `uninit` hands each in-place constructor its field
+        // alone.
+        unsafe {
+            Model::init_empty(uninit(addr_of_mut!((*p).model)));
+            addr_of_mut!((*p).map).write(BodyMap::default());
+            Workspace::init(uninit(addr_of_mut!((*p).ws)));
+            addr_of_mut!((*p).mode).write(Mode::Free);
+            addr_of_mut!((*p).coords).write(Coordinates::CrankSwing);
+            addr_of_mut!((*p).built).write(false);
+            place.assume_init_mut()
         }
     }
 
