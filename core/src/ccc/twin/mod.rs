@@ -3,7 +3,8 @@
 //! consistency conditions, plastic impacts, and coordinate switches at dead points.
 //!
 //! The rooms, one idea each: the step itself ([`Twin::step`], here); the twin's
-//! construction, by value or in place (`construction.rs`); its settings,
+//! construction, by value or in place (`construction.rs`), and what its models need of
+//! the core's capacities (`capacity.rs`); its settings,
 //! bounds and thresholds (`settings.rs`); its inputs (`inputs.rs`) and what it reports
 //! (`outputs.rs`); its errors (`error.rs`); the event functions (`guards.rs`) and their
 //! location inside a step (`locate.rs`); the mode choice at an event (`choice.rs`),
@@ -18,6 +19,7 @@
 
 mod audit;
 mod candidate;
+mod capacity;
 mod choice;
 mod consistency;
 mod construction;
