@@ -16,7 +16,8 @@
 //! DP5 steps (4, then 16; the caller's step stays `h`, its time still `(n+1)·h`); if the
 //! finest division breaks it too, the step fails with [`StepError::EnergyBalance`]. The
 //! converter's twin checks its steps by the same rule
-//! ([`TwinSettings::energy_tol`](crate::ccc::TwinSettings::energy_tol)).
+//! ([`TwinSettings::energy_tol`](crate::ccc::TwinSettings::energy_tol)), with the
+//! tolerance per 1e-4 s of step ([`energy_tolerance`](crate::ccc::energy_tolerance)).
 //!
 //! The caller-set moments of [`Workspace::applied_moment`] are not metered: a
 //! [`Simulation`](crate::Simulation) has no way to set them (the twin, which does, keeps

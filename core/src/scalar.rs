@@ -6,6 +6,8 @@
 
 use nalgebra::RealField;
 
+mod sincos;
+
 /// A real scalar usable by the core (`f64` or `f32`).
 pub trait Real: RealField + Copy + core::fmt::Debug + core::fmt::Display + Default {
     /// Converts an `f64` constant (rounded to nearest for `f32`).
@@ -16,6 +18,16 @@ pub trait Real: RealField + Copy + core::fmt::Debug + core::fmt::Display + Defau
     const EPS: Self;
     /// `true` when the value is neither NaN nor infinite.
     fn finite(self) -> bool;
+    /// The square root, correctly rounded (IEEE 754): libm's, or with the feature
+    /// `arm-vsqrt-f64` on ARM the FPU's `VSQRT.F64` (f64). Both are the correctly
+    /// rounded root, so the bits are the same; the FPU's costs one instruction (14
+    /// cycles on a Cortex-M7) where libm's software root on a core without an SSE-like
+    /// path costs ~100 instructions.
+    fn root(self) -> Self;
+    /// `(sin x, cos x)`: f64, libm's `sincos` (as `RealField::sin_cos`); f32, in `f32`
+    /// arithmetic only (Cody-Waite and Cephes polynomials: libm's `sincosf` works in f64 inside, soft-float on
+    /// a single-precision FPU), within 1.6 ulp for |x| ≤ 256 rad.
+    fn sincos(self) -> (Self, Self);
 }
 
 impl Real for f64 {
@@ -31,6 +43,33 @@ impl Real for f64 {
     #[inline(always)]
     fn finite(self) -> bool {
         self.is_finite()
+    }
+    #[inline(always)]
+    fn root(self) -> Self {
+        #[cfg(all(feature = "arm-vsqrt-f64", target_arch = "arm"))]
+        {
+            let r: f64;
+            // SAFETY: one FPU instruction on registers (a D register in, one out): no
+            // memory, no stack, no condition flags. The feature promises a
+            // double-precision FPU (FPv5-D16, Cortex-M7); without one it does not build.
+            unsafe {
+                core::arch::asm!(
+                    "vsqrt.f64 {r}, {x}",
+                    r = lateout(dreg_low16) r,
+                    x = in(dreg_low16) self,
+                    options(pure, nomem, nostack, preserves_flags)
+                );
+            }
+            r
+        }
+        #[cfg(not(all(feature = "arm-vsqrt-f64", target_arch = "arm")))]
+        {
+            nalgebra::ComplexField::sqrt(self)
+        }
+    }
+    #[inline(always)]
+    fn sincos(self) -> (Self, Self) {
+        nalgebra::ComplexField::sin_cos(self)
     }
 }
 
@@ -48,6 +87,14 @@ impl Real for f32 {
     fn finite(self) -> bool {
         self.is_finite()
     }
+    #[inline(always)]
+    fn root(self) -> Self {
+        nalgebra::ComplexField::sqrt(self)
+    }
+    #[inline]
+    fn sincos(self) -> (Self, Self) {
+        sincos::sin_cos_f32(self)
+    }
 }
 
 /// A plane vector `(x, y)`, m (or m/s, m/s²).
@@ -56,7 +103,7 @@ pub type Vec2<T> = nalgebra::Vector2<T>;
 /// `e(a) = (cos a, sin a)`: the unit vector at angle `a` (SPEC 2).
 #[inline(always)]
 pub fn unit<T: Real>(a: T) -> Vec2<T> {
-    let (s, c) = a.sin_cos();
+    let (s, c) = a.sincos();
     Vec2::new(c, s)
 }
 
@@ -76,4 +123,77 @@ pub fn perp<T: Real>(v: &Vec2<T>) -> Vec2<T> {
 #[inline(always)]
 pub fn cross<T: Real>(a: &Vec2<T>, b: &Vec2<T>) -> T {
     a.x * b.y - a.y * b.x
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Real;
+
+    /// A deterministic spread of f64 bit patterns: every exponent (subnormals included),
+    /// pseudo-random mantissas (xorshift), and the edges.
+    fn samples() -> impl Iterator<Item = f64> {
+        let mut x: u64 = 0x9e37_79b9_7f4a_7c15;
+        let edges = [
+            0.0,
+            -0.0,
+            f64::MIN_POSITIVE,
+            f64::MAX,
+            1.0,
+            2.0,
+            4.0,
+            f64::INFINITY,
+        ];
+        edges.into_iter().chain((0..200_000).map(move |_| {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            // Positive, any exponent up to the largest finite.
+            f64::from_bits(x & 0x7fef_ffff_ffff_ffff)
+        }))
+    }
+
+    /// `Real::root` is the correctly rounded square root: against Rust's own `sqrt`
+    /// (IEEE 754's, correctly rounded) and, independently, by its residual: `r` is the
+    /// root rounded to nearest iff `x` lies between the squares of the midpoints to
+    /// `r`'s neighbours, checked in exact integer arithmetic for normal `r`.
+    #[test]
+    fn root_is_correctly_rounded() {
+        extern crate std;
+        for x in samples() {
+            let r = x.root();
+            assert_eq!(
+                r.to_bits(),
+                std::primitive::f64::sqrt(x).to_bits(),
+                "root({x:e})"
+            );
+            if r.is_normal() && x.is_normal() {
+                // r = m·2^e with a 53-bit m; midpoints (2m ± 1)·2^(e-1); squares
+                // (2m ± 1)²·2^(2e-2) against x = mx·2^ex.
+                let (m, e) = (
+                    ((r.to_bits() & ((1 << 52) - 1)) | (1 << 52)) as u128,
+                    ((r.to_bits() >> 52) as i32) - 1075,
+                );
+                let (mx, ex) = (
+                    ((x.to_bits() & ((1 << 52) - 1)) | (1 << 52)) as u128,
+                    ((x.to_bits() >> 52) as i32) - 1075,
+                );
+                let shift = ex - (2 * e - 2);
+                assert!((50..=60).contains(&shift), "exponents {x:e}: {shift}");
+                let xs = mx << shift;
+                let (lo, hi) = ((2 * m - 1) * (2 * m - 1), (2 * m + 1) * (2 * m + 1));
+                assert!(
+                    lo <= xs && xs <= hi,
+                    "root({x:e}) = {r:e} is not rounded to nearest"
+                );
+            }
+        }
+        // f32: against the f64 root rounded once more (exact: 53 ≥ 2·24 + 2 bits).
+        for x in samples().map(|x| x as f32).filter(|x| x.is_finite()) {
+            assert_eq!(
+                x.root().to_bits(),
+                ((x as f64).root() as f32).to_bits(),
+                "root({x:e})"
+            );
+        }
+    }
 }

@@ -21,7 +21,7 @@ slider-crank --t-end 1
 ccc-s1 --t-end 0.02
 ccc-s2 --t-end 0.02 --ccw --motor 10 --load 600
 five-bar --f32 --t-end 0.02
-ccc-s2 --h 0.01              # the speeds overflow: a failed step
+ccc-s2 --h 0.05              # far too coarse: a failed step
 five-bar --h 0.2             # the same for a mechanism
 ";
 
@@ -198,7 +198,7 @@ fn each_run_as_alone_and_the_table() {
         assert!(failed[col("message")].contains("failed"), "{failed:?}");
     }
     assert_eq!(rows[7][col("time")], "");
-    assert!(err.contains("job 6 (line 9: ccc-s2 --h 0.01)"), "{err}");
+    assert!(err.contains("job 6 (line 9: ccc-s2 --h 0.05)"), "{err}");
 }
 
 // A bad line is refused with its line number and what is wrong, before anything runs:

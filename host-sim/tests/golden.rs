@@ -59,8 +59,8 @@ struct Pin<'a> {
 /// they were minted, by `cargo test -p host-sim --test golden` and
 /// `cargo test --release -p host-sim --test golden` (x86_64 Linux, rustc 1.95).
 /// `ccc-s1` ends at the mechanism's singularity (its expected end, exit status 0), and
-/// so does `ccc-s1 --f32`, 1.1 ms earlier: rounding breaks its energy balance while the
-/// diode's branches are 1.2 ms from in line (`TwinStepError::Diode`'s horizon). Both S1 logs hold only their
+/// so does `ccc-s1 --f32`, 1.9 ms earlier: rounding breaks its energy balance while the
+/// diode's branches are 2.0 ms from in line (`TwinStepError::Diode`'s horizon). Both S1 logs hold only their
 /// header (free mode has no start event and S1 no coordinate switch), hence the same
 /// log hashes.
 const PINS: &[Pin<'static>] = &[
@@ -106,13 +106,13 @@ const PINS: &[Pin<'static>] = &[
     Pin {
         args: "five-bar --f32",
         exit: 0,
-        csv: "3e79f15b9e35886c9beded7d89c60d24e00953ad6fbf80127cc3270601708349",
+        csv: "3779fc397470c5b974b4c8e34322ba7ef1be535827b33dbf596111d948859e0a",
         logs: None,
     },
     Pin {
         args: "ccc-s1 --f32",
         exit: 0,
-        csv: "142dcffc2cd798d7ae3a223f3c8c8b1dff9e6137f3a3efec8667398e44739360",
+        csv: "42ea5d91d9ffec0e94ed27b4c4f28189be3d647217cb21b9c4bdf7ab880d0be4",
         logs: Some((
             "2a18d19a58b935cc5a81a088e9c456f81ad855f74a9f76a5d7ec92b8b8ba339b",
             "9a52b761f69ab666f48cadb42b788f2fabceddd39201f1066997acf316fd6238",
@@ -121,10 +121,10 @@ const PINS: &[Pin<'static>] = &[
     Pin {
         args: "ccc-s2 --f32",
         exit: 0,
-        csv: "8f6b295a8234b3761103a998e359f8ef40bc503a93e79b316d02aee4529d2e23",
+        csv: "8ceec2b3fa8811de314d2ba05983205cdae314b1f3ad77c80a8435b223023226",
         logs: Some((
-            "ae8a0b022d34018417a0cc68b389270b6434a8ffc1447e5043b90d717e7489a1",
-            "7993420613b636e4365eba947e283e5b503731fc986054d7d44d5731d9fb69a7",
+            "ff19b8d47c8b8db9235922d202c56ba8d26c412345de2cc8adfb669ec9c26271",
+            "5d765c389d5181db880e4174aaa44633746a6d2086867ab806eb053d4af0c488",
         )),
     },
 ];

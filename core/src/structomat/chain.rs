@@ -190,7 +190,7 @@ pub(crate) fn angle_cs<T: Real>(
             .copied()
             .unwrap_or(Vec2::new(T::one(), T::zero())),
         Base::Coord(j) => {
-            let (s, c) = get(q, j).sin_cos();
+            let (s, c) = get(q, j).sincos();
             Vec2::new(c, s)
         }
         Base::Body(b) => bodies
@@ -633,7 +633,7 @@ fn factor_w<T: Real, const N: usize>(
             let v = row.get(c).copied().unwrap_or(T::zero());
             sq += v * v;
         }
-        norms *= sq.sqrt();
+        norms *= sq.root();
     }
     // A dyad's 2×2 inverse in closed form; larger groups by LU (n³/3, where an
     // inverse costs n³: W is used for the 2 or 3 solves of the linear passes only).

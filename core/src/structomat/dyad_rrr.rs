@@ -179,7 +179,7 @@ pub(crate) fn solve<T: Real>(
     let a = point_pos(model, bodies, start);
     let b = point_pos(model, bodies, end);
     let d = b - a;
-    let dist = d.norm();
+    let dist = d.norm_squared().root();
     if !dist.finite() {
         return Err(GroupFault::NonFiniteInput);
     }
@@ -195,7 +195,7 @@ pub(crate) fn solve<T: Real>(
         return Err(GroupFault::CannotAssemble { gap: gap.to_f64() });
     }
     let e = d / dist;
-    let c = a + e * along + perp(&e) * (gd.branch * h2.sqrt());
+    let c = a + e * along + perp(&e) * (gd.branch * h2.root());
     let (wa, wb) = (c - a, b - c);
     let (ua, ub) = (wa / la, -wb / lb);
     // θ = ∠u - α: turn u back by α.

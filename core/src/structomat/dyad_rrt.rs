@@ -177,12 +177,12 @@ pub(crate) fn solve<T: Real>(
         return Err(GroupFault::NonFiniteInput);
     }
     if disc < T::zero() {
-        let off_line = (e.norm_squared() - ue * ue).max(T::zero()).sqrt();
+        let off_line = (e.norm_squared() - ue * ue).max(T::zero()).root();
         return Err(GroupFault::CannotAssemble {
             gap: (off_line - lr).to_f64(),
         });
     }
-    let s = -ue + gd.branch * disc.sqrt();
+    let s = -ue + gd.branch * disc.root();
     let c = k + u * s;
     let ur = (c - a) / lr;
     // The rod's angle is ∠(C - A) - α: turn the unit vector back by α.

@@ -52,7 +52,7 @@ impl<T: Real> DyadRtr<T> {
         let bl = model.local(self.b, self.b_line, "dyad RTR: b line point")?;
         let pole_a = model.resolve(self.pole_a, "dyad RTR: pole A")?;
         let pole_b = model.resolve(self.pole_b, "dyad RTR: pole B")?;
-        let (sb, cb) = self.a_angle.sin_cos();
+        let (sb, cb) = self.a_angle.sincos();
         let d = unit(self.b_line_angle);
         let c = (bl - bb) - rotate_cs(cb, sb, &(asl - aa));
         let var0 = |off: T| Angle::new(Base::Var(0), off);
@@ -154,12 +154,12 @@ pub(crate) fn solve<T: Real>(
         return Err(GroupFault::NonFiniteInput);
     }
     if disc < T::zero() {
-        let off = (c.norm_squared() - cd * cd).max(T::zero()).sqrt();
+        let off = (c.norm_squared() - cd * cd).max(T::zero()).root();
         return Err(GroupFault::CannotAssemble {
-            gap: (off - dist2.sqrt()).to_f64(),
+            gap: (off - dist2.root()).to_f64(),
         });
     }
-    let s = -cd + gd.branch * disc.sqrt();
+    let s = -cd + gd.branch * disc.root();
     let r = c + d * s;
     // θb = ∠(A - B) - ∠r; |r| = |AB| by construction, so e(θb) = (AB·r, r×AB) / |AB|².
     let (cb, sb) = (ab.dot(&r) / dist2, (r.x * ab.y - r.y * ab.x) / dist2);

@@ -141,7 +141,7 @@ pub struct Angle<T: Real> {
 impl<T: Real> Angle<T> {
     /// The angle `base + offset`.
     pub fn new(base: Base, offset: T) -> Self {
-        let (s, c) = offset.sin_cos();
+        let (s, c) = offset.sincos();
         Angle {
             base,
             offset,

@@ -99,7 +99,7 @@ fn predict<T: Real>(gd: &mut GroupData<T>, n: usize, q: &[T], qd: &[T]) -> bool 
 #[inline]
 fn turn<T: Real>(cs: Vec2<T>, x: T, d: T) -> Vec2<T> {
     if !(d.abs() <= T::c(0.03125)) {
-        let (s, c) = x.sin_cos();
+        let (s, c) = x.sincos();
         return Vec2::new(c, s);
     }
     let d2 = d * d;
@@ -160,7 +160,7 @@ fn solve_n<T: Real, const N: usize>(
             .take(n)
     {
         if angles & (1 << k) != 0 && (predicted || *at != *x) {
-            let (s, c) = x.sin_cos();
+            let (s, c) = x.sincos();
             *cs = Vec2::new(c, s);
             *at = *x;
         }

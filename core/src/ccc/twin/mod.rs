@@ -41,8 +41,8 @@ pub use error::{Failure, TwinSetupError, TwinStepError};
 pub use guards::{Event, EventKind};
 pub use inputs::{Inputs, MotorInput};
 pub use settings::{
-    TwinSettings, DIODE_HORIZON_STEPS, MAX_EVENTS_PER_STEP, MAX_LOCATE_ITER, MAX_RETRIES,
-    SINGULAR_CONDITIONING, SUBSTEPS,
+    energy_tolerance, TwinSettings, DIODE_HORIZON_STEPS, ENERGY_TOL_STEP, MAX_EVENTS_PER_STEP,
+    MAX_LOCATE_ITER, MAX_RETRIES, SINGULAR_CONDITIONING, SUBSTEPS,
 };
 pub use slot::{LinkState, JOINTS, JOINT_NAMES};
 
