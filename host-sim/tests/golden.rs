@@ -121,10 +121,10 @@ const PINS: &[Pin<'static>] = &[
     Pin {
         args: "ccc-s2 --f32",
         exit: 0,
-        csv: "8f6b295a8234b3761103a998e359f8ef40bc503a93e79b316d02aee4529d2e23",
+        csv: "40638fd57da180a4847e1e1f1d39fe5e3d34bafbab9b8c141367aabfeef2a9bc",
         logs: Some((
-            "ae8a0b022d34018417a0cc68b389270b6434a8ffc1447e5043b90d717e7489a1",
-            "7993420613b636e4365eba947e283e5b503731fc986054d7d44d5731d9fb69a7",
+            "5a0d2a90b70b5b8610f82a5dbc3767b4546e5d234c4960593ddaa66a944372bb",
+            "3606cd6bd5ac3e5ea930bb345f55e4512511b15b9772bffe349cc4950b0f0e0c",
         )),
     },
 ];
