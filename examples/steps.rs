@@ -20,6 +20,9 @@
 //!     target/release/examples/steps twin-f64-at 667
 //! ```
 //!
+//! `twin-f32-at` and `twin-f32-log` are the same in f32; `STEPS_H=1e-3` in the
+//! environment sets the step (1e-4 s without it).
+//!
 //! `twin-f64-log` lists S2's steps (first second) that hold an event, a coordinate
 //! switch or a mode change: the indices to give `twin-f64-at`.
 //! With `STEPS_LOG` set in the environment, the core's `log` records (debug level:
@@ -49,25 +52,30 @@ fn twin<T: Real>(steps: u32) -> Result<T, String> {
 
 /// The steps counted by `twin-f64-at` (callgrind's `--toggle-collect='*measured*'`).
 #[inline(never)]
-fn measured(twin: &mut Twin<f64>, inputs: &Inputs<f64>, n: u32) -> Result<(), String> {
+fn measured<T: Real>(twin: &mut Twin<T>, inputs: &Inputs<T>, n: u32) -> Result<(), String> {
     for _ in 0..n {
         twin.step(black_box(inputs)).map_err(|e| e.to_string())?;
     }
     Ok(())
 }
 
-/// S2 in f64 up to step `at`, then `n` steps in [`measured`]; `log`: print each step
-/// with an event, a switch or a mode change.
-fn twin_at(at: u32, n: u32, log: bool) -> Result<f64, String> {
+/// S2 up to step `at`, then `n` steps in [`measured`]; `log`: print each step with an
+/// event, a switch or a mode change. The step is `STEPS_H` from the environment (s),
+/// 1e-4 s without it.
+fn twin_at<T: Real>(at: u32, n: u32, log: bool) -> Result<T, String> {
     let inputs = Inputs {
-        motor: MotorInput::Law(Motor::Constant(12.0)),
-        load: 800.0,
+        motor: MotorInput::Law(Motor::Constant(T::c(12.0))),
+        load: T::c(800.0),
         measured: None,
     };
+    let h = std::env::var("STEPS_H")
+        .ok()
+        .and_then(|h| h.parse::<f64>().ok())
+        .unwrap_or(1e-4);
     let mut twin = Box::new(
         Twin::new(
             CccParams::reference(),
-            TwinSettings::reference(1e-4),
+            TwinSettings::reference(T::c(h)),
             inputs,
         )
         .map_err(|e| e.to_string())?,
@@ -90,7 +98,7 @@ fn twin_at(at: u32, n: u32, log: bool) -> Result<f64, String> {
                 .collect();
             println!(
                 "step {k} t={:.4} {}/{} -> {}/{}: {} {}",
-                twin.time(),
+                twin.time().to_f64(),
                 before.0,
                 before.1,
                 twin.mode(),
@@ -140,8 +148,10 @@ fn main() -> ExitCode {
     let result = match work.as_str() {
         "twin-f64" => twin::<f64>(steps),
         "twin-f32" => twin::<f32>(steps).map(f64::from),
-        "twin-f64-at" => twin_at(steps, n, false),
-        "twin-f64-log" => twin_at(steps, 0, true),
+        "twin-f64-at" => twin_at::<f64>(steps, n, false),
+        "twin-f64-log" => twin_at::<f64>(steps, 0, true),
+        "twin-f32-at" => twin_at::<f32>(steps, n, false).map(f64::from),
+        "twin-f32-log" => twin_at::<f32>(steps, 0, true).map(f64::from),
         "five-bar-f64" => five::<f64>(steps),
         "five-bar-f32" => five::<f32>(steps).map(f64::from),
         other => Err(format!("unknown workload {other}")),

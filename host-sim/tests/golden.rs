@@ -121,10 +121,10 @@ const PINS: &[Pin<'static>] = &[
     Pin {
         args: "ccc-s2 --f32",
         exit: 0,
-        csv: "8ceec2b3fa8811de314d2ba05983205cdae314b1f3ad77c80a8435b223023226",
+        csv: "40638fd57da180a4847e1e1f1d39fe5e3d34bafbab9b8c141367aabfeef2a9bc",
         logs: Some((
-            "ff19b8d47c8b8db9235922d202c56ba8d26c412345de2cc8adfb669ec9c26271",
-            "5d765c389d5181db880e4174aaa44633746a6d2086867ab806eb053d4af0c488",
+            "5a0d2a90b70b5b8610f82a5dbc3767b4546e5d234c4960593ddaa66a944372bb",
+            "3606cd6bd5ac3e5ea930bb345f55e4512511b15b9772bffe349cc4950b0f0e0c",
         )),
     },
 ];

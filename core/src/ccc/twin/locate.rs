@@ -3,7 +3,7 @@
 
 use super::error::TwinStepError;
 use super::evaluate::{Stage, Torques};
-use super::guards::{EventKind, Fired, Guard, Guards};
+use super::guards::{EventKind, Fired, Guard, Guards, CATCH_ULPS};
 use super::inputs::Inputs;
 use super::settings::*;
 use super::slot::STATE;
@@ -12,8 +12,34 @@ use crate::scalar::Real;
 use nalgebra::SVector;
 
 /// An event is located to this fraction of the step (1e-12 s at h = 1e-4 s; f32: 8 ulps,
-/// see `Twin::locate`).
+/// or the event function's rounding floor, see `Twin::locate`).
 pub(super) const THETA_TOL: f64 = 1e-8;
+
+/// Ulps of the torque scale (T_r + 1 N·m plus the clutch torques at the step's start)
+/// under which a transmitted torque is rounding: inside that band a torque function's
+/// sign is noise. S2 in f32 at h = 1 ms: c8 of A68 driven by its lever (a six-link
+/// group by Newton) scatters by ±0.04 N·m (~420 ulps of 800 N·m) around its release at
+/// 0.2629 s, and the iteration spent its 16 full evaluations (kinetostatics included)
+/// on that noise, 120k x86 instructions. f64: 1.8e-10 N·m, far under anything S2's
+/// torque functions resolve.
+pub(super) const TORQUE_NOISE_ULPS: f64 = 1024.0;
+
+/// Largest fraction of the step the rounding floor may widen the tolerance to (a
+/// function that barely crosses over the step).
+pub(super) const NOISE_THETA_MAX: f64 = 1e-3;
+
+/// The fraction of the step `θ` below which the fired event functions' rounding hides
+/// their crossing: their rounding floor (`noise`, in their units) over their rise across
+/// the step (`chord`, per unit of θ), at most [`NOISE_THETA_MAX`]; 0 if they do not
+/// rise.
+pub(super) fn noise_theta<T: Real>(noise: T, chord: T) -> T {
+    let th = noise / chord;
+    if chord > T::zero() && th.finite() {
+        th.min(T::c(NOISE_THETA_MAX))
+    } else {
+        T::zero()
+    }
+}
 
 /// The root in (0, 1) of the cubic Hermite interpolant of an event function over a
 /// step, `p(0) = g0 ≤ 0 < p(1) = g1` with slopes `s0`, `s1` (per unit of the step's
@@ -177,15 +203,21 @@ impl<T: Real> Twin<T> {
     ) -> Result<(T, EventKind, bool), TwinStepError> {
         // The caller evaluates the state at the event in full after this.
         let speeds_only = fired.speeds_only();
+        let (glo, _) = largest_fired(g0, fired);
+        let (ghi, which) = largest_fired(&self.guards, fired);
         // THETA_TOL, or 8 ulps of the step's fraction if that is larger (f32: 9.5e-7),
-        // so that the margin below moves the point by a few ulps at least.
-        let tol = T::c(THETA_TOL).max(T::EPS * T::c(8.0));
+        // so that the margin below moves the point by a few ulps at least; or the
+        // fraction under which the fired functions are rounding (`noise_theta`):
+        // closer than that, their signs are noise and only the evaluation cap ends the
+        // iteration. f64 at S2's events: under 1e-11, so THETA_TOL decides.
+        let floor = self.fired_noise(fired, inputs);
+        let tol = T::c(THETA_TOL)
+            .max(T::EPS * T::c(8.0))
+            .max(noise_theta(floor, ghi - glo));
         // Two points this close to each other bracket... or not, but their secant
         // places the crossing to about near²·|g''/g'| (θ units), 1e-10 in f64 for a
         // curvature |g''/g'| of 1 per step: far below `tol`.
         let near = (tol * T::c(0.01)).sqrt();
-        let (glo, _) = largest_fired(g0, fired);
-        let (ghi, which) = largest_fired(&self.guards, fired);
         let mut b = Bracket {
             lo: T::zero(),
             hi: T::one(),
@@ -252,6 +284,19 @@ impl<T: Real> Twin<T> {
             b.hi - b.lo
         );
         Ok((b.hi, b.which.event(), at_hi))
+    }
+
+    /// The rounding floor of the fired event functions, in their units: a speed's
+    /// [`CATCH_ULPS`] ulps of the largest link speed (the catches' own offset), a
+    /// torque's [`TORQUE_NOISE_ULPS`] ulps of the torque scale (T_r + 1 N·m and the
+    /// clutch torques of the last full evaluation), the larger if both kinds fired.
+    fn fired_noise(&self, fired: Fired, inputs: &Inputs<T>) -> T {
+        let speed = T::EPS * T::c(CATCH_ULPS) * speed_scale(&self.links);
+        if fired.speeds_only() {
+            return speed;
+        }
+        let scale = inputs.load.abs() + T::one() + self.c[0].abs() + self.c[1].abs();
+        speed.max(T::EPS * T::c(TORQUE_NOISE_ULPS) * scale)
     }
 
     /// Where the iteration starts: a single fired function's interpolant's root over
@@ -423,7 +468,7 @@ impl<T: Real> Bracket<T> {
 
 #[cfg(test)]
 mod tests {
-    use super::{bracketed_root, hermite_root};
+    use super::{bracketed_root, hermite_root, noise_theta, NOISE_THETA_MAX, THETA_TOL};
 
     /// An event function over a step (θ in [0, 1]) and its slope.
     fn quartic(th: f64) -> (f64, f64) {
@@ -476,5 +521,26 @@ mod tests {
         // No bracket, no root.
         assert!(bracketed_root(p, 0.5, 0.5, tol).is_none());
         assert!(hermite_root(0.1, 0.5, 1.0, 1.0, None, tol).is_none());
+    }
+
+    /// The rounding floor in θ is the floor over the rise across the step (a line's
+    /// crossing moves by noise / slope), capped, and nothing for a function that does
+    /// not rise. In f64 at S2's scales (1024 ulps of 801 N·m over a rise of 30 N·m a
+    /// step, h = 1e-4 s) it is far under THETA_TOL, which then decides alone.
+    #[test]
+    fn the_rounding_floor_in_theta_is_noise_over_the_rise() {
+        assert_eq!(noise_theta(0.5, 100.0), 0.005_f64.min(NOISE_THETA_MAX));
+        assert!((noise_theta(0.01_f64, 100.0) - 1e-4).abs() <= 1e-19);
+        assert_eq!(noise_theta(1.0, 0.5), NOISE_THETA_MAX);
+        assert_eq!(noise_theta(1.0, 0.0), 0.0);
+        assert_eq!(noise_theta(1.0, -2.0), 0.0);
+        assert_eq!(noise_theta(1.0, f64::NAN), 0.0);
+        let f64_floor = 1024.0 * f64::EPSILON * 801.0;
+        assert!(noise_theta(f64_floor, 30.0) < THETA_TOL * 1e-3);
+        // f32 at h = 1 ms, S2's release at 0.2629 s (a rise of ~300 N·m a step): the
+        // scatter measured there, ±0.04 N·m, is inside the floor.
+        let f32_floor = 1024.0 * f32::EPSILON * 801.0;
+        assert!(f32_floor > 0.04);
+        assert!(noise_theta(f32_floor, 300.0f32) < 1e-3);
     }
 }
