@@ -61,6 +61,15 @@ pub struct Metered {
     pub redone: u64,
     /// Sub-steps taken by them.
     pub substeps: u64,
+    /// Steps redone because a coarser division broke the energy balance.
+    pub redone_energy: u64,
+    /// Steps redone because a coarser division's error estimate was over the local
+    /// tolerance (`structomat::simulation::substeps`).
+    pub redone_error: u64,
+    /// Steps accepted in 16 sub-steps with their error estimate still over it.
+    pub inexact: u64,
+    /// The largest accepted error estimate relative to the local tolerance.
+    pub worst_error: f64,
 }
 
 /// What a run did (printed as a few lines by its `Display`).
@@ -214,11 +223,22 @@ impl fmt::Display for Summary {
             -b.residual
         )?;
         match self.adaptive {
-            None => writeln!(
-                f,
-                "; worst step {:.1e} of its energy scale, {} steps redone in {} sub-steps",
-                b.worst, b.redone, b.substeps
-            )?,
+            None => {
+                writeln!(f, "; worst step {:.1e} of its energy scale", b.worst)?;
+                writeln!(
+                    f,
+                    "substeps  {} steps redone in {} sub-steps: {} for the energy balance, {} for the local error (DP5's 5(4) estimate)",
+                    b.redone, b.substeps, b.redone_energy, b.redone_error
+                )?;
+                if b.inexact > 0 {
+                    writeln!(
+                        f,
+                        "warning   {} steps over the local error tolerance even in 16 sub-steps (the worst at {:.1e} times it): the motion is too fast for h there; a smaller h is more accurate",
+                        b.inexact,
+                        b.worst_error
+                    )?;
+                }
+            }
             Some(_) => writeln!(
                 f,
                 " (adaptive steps: kept by the error control, not checked)"
@@ -474,6 +494,10 @@ pub fn simulate<T: Real>(
                 worst: b.worst.to_f64(),
                 redone: b.redone,
                 substeps: b.substeps,
+                redone_energy: b.redone_energy,
+                redone_error: b.redone_error,
+                inexact: b.inexact,
+                worst_error: b.worst_error.to_f64(),
             }
         },
         max_reaction: max.map(|(k, value, time)| MaxReaction {
