@@ -146,6 +146,7 @@ impl Outcome {
     pub fn end(&self) -> &'static str {
         match self {
             Outcome::Mechanism(Ok(s)) if s.interrupted => "interrupted",
+            Outcome::Mechanism(Ok(s)) if s.singular.is_some() => "singularity",
             Outcome::Converter(Ok(CccSummary {
                 end: End::Interrupted,
                 ..

@@ -34,6 +34,32 @@ pub struct MeanSpeed {
     pub angular: bool,
 }
 
+/// A run's end at a singularity of the mechanism.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SingularEnd {
+    /// The located time, s (inside the step after the last state written).
+    pub time: f64,
+    /// The group and the cause (`group RRR(2,3): ...`), or the mass matrix's.
+    pub cause: String,
+}
+
+impl SingularEnd {
+    /// The end the core's error `e` (its time located) describes.
+    fn of(e: &StepError) -> Self {
+        let cause = match e {
+            StepError::Group { group, fault, .. } => format!("group {group}: {fault}"),
+            StepError::SingularMassMatrix { .. } => {
+                "the reduced mass matrix is singular".to_string()
+            }
+            other => other.to_string(),
+        };
+        SingularEnd {
+            time: e.time(),
+            cause,
+        }
+    }
+}
+
 /// The largest reaction force magnitude of a run.
 #[derive(Clone, Debug, PartialEq)]
 pub struct MaxReaction {
@@ -102,6 +128,9 @@ pub struct Summary {
     /// Whether SIGINT or SIGTERM stopped the run before `t_end` (after the row of its
     /// last state was written).
     pub interrupted: bool,
+    /// Where the run ended at a singularity of the mechanism (the constraints losing
+    /// rank), located inside the step that met it: its expected end, exit status 0.
+    pub singular: Option<SingularEnd>,
     /// The motors' warnings: a characteristic that rises again past a speed (set-up),
     /// a motor driven out of its working zone (the first time, with its numbers).
     pub warnings: Vec<String>,
@@ -171,6 +200,14 @@ impl fmt::Display for Summary {
                 f,
                 "interrupted at t = {} s (SIGINT or SIGTERM): the files hold the run up to there",
                 Fig(self.time)
+            )?;
+        }
+        if let Some(end) = &self.singular {
+            writeln!(
+                f,
+                "end       ended at a singularity at t = {} s ({}); the files hold the run up to the last step before it",
+                Sci(end.time),
+                end.cause
             )?;
         }
         if let Some((accepted, rejected)) = self.adaptive {
@@ -427,8 +464,9 @@ pub fn simulate<T: Real>(
     let wall = start.elapsed();
     progress.finish();
     obs.on_end()?;
-    let interrupted = match outcome {
-        Ok(stop) => stop,
+    let (interrupted, singular) = match outcome {
+        Ok(stop) => (stop, None),
+        Err(Failure::Singular(e)) => (false, Some(SingularEnd::of(&e))),
         Err(Failure::Step {
             kinetostatics,
             error,
@@ -484,6 +522,7 @@ pub fn simulate<T: Real>(
         energy_start,
         energy_end: (e1.kinetic.to_f64(), e1.potential.to_f64()),
         interrupted,
+        singular,
         warnings: motors.warnings,
         balance: {
             let b = sim.balance();
@@ -609,6 +648,9 @@ enum Failure {
     },
     /// The adaptive integrator gave up.
     Integrator(String),
+    /// The next step met a singularity of the mechanism, located inside it: the run's
+    /// end (the error's time is the located one).
+    Singular(StepError),
 }
 
 impl Failure {
@@ -620,20 +662,22 @@ impl Failure {
         }
     }
 
-    /// A step's failure at a singularity of the mechanism with the time located inside
-    /// the step ([`Simulation::locate_failure`]); the others as they are.
+    /// A step's failure at a singularity of the mechanism (or its energy balance broken
+    /// on the way into one) with the time located inside the step
+    /// ([`Simulation::locate_singularity`]): [`Failure::Singular`]; the others as they
+    /// are.
     fn located<T: Real>(self, sim: &Simulation<T>) -> Self {
         match self {
             Failure::Step {
                 kinetostatics: false,
                 error,
-            } if at_singularity(&error) => {
+            } if at_singularity(&error) || matches!(error, StepError::EnergyBalance { .. }) => {
                 let mut scratch = Box::new(structomat::Workspace::new());
-                let error = match sim.locate_failure(&mut scratch) {
-                    Some(t) => error.at_time(t.to_f64()),
-                    None => error,
-                };
-                Failure::step(error)
+                let span = if at_singularity(&error) { 1 } else { 2 };
+                match sim.locate_singularity(&mut scratch, span) {
+                    Some((_, e)) => Failure::Singular(e),
+                    None => Failure::step(error),
+                }
             }
             f => f,
         }
