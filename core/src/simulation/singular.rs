@@ -58,7 +58,7 @@ impl<T: Real> Simulation<T> {
     /// The located time within `steps` step lengths and the error of the failing trial
     /// at the bracket's end.
     fn locate(&self, scratch: &mut Workspace<T>, steps: u32) -> Option<(T, StepError)> {
-        let t_next = T::c((self.steps + u64::from(steps.max(1))) as f64) * self.h;
+        let t_next = T::c(self.steps.saturating_add(u64::from(steps.max(1))) as f64) * self.h;
         let h = t_next - self.t;
         let trial = |size: T, scratch: &mut Workspace<T>| -> Result<(), StepError> {
             scratch.clone_from(&self.ws);
