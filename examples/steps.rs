@@ -10,7 +10,10 @@
 //! The difference of the two totals over the steps is the mean instruction count of a
 //! step (set-up cancels out). Workloads: `twin-f64`, `twin-f32` (S2: 12 N·m, T_r =
 //! 800 N·m, h = 1e-4 s, the first 10 000 steps are its first second, events included),
-//! `five-bar-f64`, `five-bar-f32` (the thesis's five-bar at h = 1e-3 s).
+//! `five-bar-f64`, `five-bar-f32` (the thesis's five-bar at h = 1e-3 s);
+//! `five-bar-f64-unchecked` (its local error unchecked: no sub-steps for it) and
+//! `five-bar-f64-bare` (bare `Dp5::step`s: no energy balance, no output check), the
+//! references for the checks' cost.
 //!
 //! One step's count: `twin-f64-at K [N]` runs S2's steps before `K` untimed and steps
 //! `K..K+N` (default 1) inside `measured`, which callgrind alone can count:
@@ -121,6 +124,47 @@ fn five<T: Real>(steps: u32) -> Result<T, String> {
     Ok(sim.q()[0])
 }
 
+/// The five-bar's steps with the local error unchecked (the energy balance checked):
+/// a plain step's work, its sub-steps for the energy balance only.
+fn five_unchecked(steps: u32) -> Result<f64, String> {
+    let scenario = five_bar::<f64>().map_err(|e| e.to_string())?;
+    let mut sim = Box::new(scenario.simulation().map_err(|e| e.to_string())?);
+    sim.set_local_tolerance(f64::INFINITY, 0.0)
+        .map_err(|e| e.to_string())?;
+    for _ in 0..steps {
+        sim.step().map_err(|e| e.to_string())?;
+    }
+    Ok(sim.q()[0])
+}
+
+/// The five-bar's bare DP5 steps (`Dp5::step` on the equations of motion: no energy
+/// balance, no output check): the reference for the checks' cost.
+fn five_bare(steps: u32) -> Result<f64, String> {
+    use structomat::config::{MAX_DOF, STATE_DIM};
+    use structomat::integrator::Dp5;
+    use structomat::simulation::Equations;
+    let scenario = five_bar::<f64>().map_err(|e| e.to_string())?;
+    let sim = scenario.simulation().map_err(|e| e.to_string())?;
+    let mut ws = Box::new(sim.workspace().clone());
+    let mut y = nalgebra::SVector::<f64, STATE_DIM>::zeros();
+    for (k, (q, qd)) in sim.q().iter().zip(sim.qd()).enumerate() {
+        y[k] = *q;
+        y[MAX_DOF + k] = *qd;
+    }
+    let mut dp5 = Box::new(Dp5::<f64, STATE_DIM>::new());
+    let mut t = 0.0;
+    for n in 1..=steps {
+        let mut eq = Equations {
+            model: sim.model(),
+            ws: &mut ws,
+        };
+        let h = f64::from(n) * 1e-3 - t;
+        dp5.step(&mut eq, &mut t, &mut y, h)
+            .map_err(|e| e.to_string())?;
+    }
+    Ok(y[0])
+}
+
 struct Logger;
 impl log::Log for Logger {
     fn enabled(&self, _: &log::Metadata) -> bool {
@@ -154,6 +198,8 @@ fn main() -> ExitCode {
         "twin-f32-log" => twin_at::<f32>(steps, 0, true).map(f64::from),
         "five-bar-f64" => five::<f64>(steps),
         "five-bar-f32" => five::<f32>(steps).map(f64::from),
+        "five-bar-f64-unchecked" => five_unchecked(steps),
+        "five-bar-f64-bare" => five_bare(steps),
         other => Err(format!("unknown workload {other}")),
     };
     match result {

@@ -14,7 +14,9 @@
 //! A step whose residual (work in minus energy gained) exceeds [`tolerance`] times the
 //! energy scale `1 J + |W_motors| + |W_loads| + |K| + |V|` is redone in [`SUBSTEPS`]
 //! DP5 steps (4, then 16; the caller's step stays `h`, its time still `(n+1)·h`); if the
-//! finest division breaks it too, the step fails with [`StepError::EnergyBalance`]. The
+//! finest division breaks it too, the step fails with [`StepError::EnergyBalance`].
+//! The same sub-steps keep each step's local error
+//! ([`crate::simulation::substeps`]). The
 //! converter's twin checks its steps by the same rule
 //! ([`TwinSettings::energy_tol`](crate::ccc::TwinSettings::energy_tol)), with the
 //! tolerance per 1e-4 s of step ([`energy_tolerance`](crate::ccc::energy_tolerance)).
@@ -29,6 +31,7 @@ use crate::error::StepError;
 use crate::integrator::{Adaptive, AdaptiveError, AdaptiveStats, Dp5, OdeSystem, Tableau};
 use crate::model::Model;
 use crate::scalar::{rotate_cs, Real, Vec2};
+use crate::simulation::substeps::{local_tolerance, Audited, Refused};
 use crate::simulation::Equations;
 use crate::workspace::Workspace;
 use nalgebra::SVector;
@@ -66,10 +69,21 @@ pub struct Balance<T> {
     /// The largest residual of one step relative to its energy scale (dimensionless;
     /// the steps pass while it is at most [`tolerance`]).
     pub worst: T,
-    /// Steps redone in sub-steps.
+    /// Steps redone in sub-steps ([`crate::simulation::substeps`]), for either reason.
     pub redone: u64,
     /// DP5 sub-steps of the redone steps, in all.
     pub substeps: u64,
+    /// Steps redone because a coarser division broke the energy balance.
+    pub redone_energy: u64,
+    /// Steps redone because a coarser division's error estimate exceeded the local
+    /// tolerance ([`local_tolerance`](crate::simulation::substeps::local_tolerance)).
+    pub redone_error: u64,
+    /// Steps accepted in the finest division with an error estimate still over the
+    /// local tolerance.
+    pub inexact: u64,
+    /// The largest error estimate of an accepted step relative to its local tolerance
+    /// (fixed steps; at most 1 while `inexact` is 0).
+    pub worst_error: T,
     /// Intervals of [`Simulation::step_adaptive`](crate::Simulation::step_adaptive),
     /// whose balance is not checked (the error control keeps it; their work is metered
     /// all the same, and `worst` covers the fixed steps only).
@@ -91,6 +105,10 @@ impl<T: Real> Balance<T> {
             worst: T::zero(),
             redone: 0,
             substeps: 0,
+            redone_energy: 0,
+            redone_error: 0,
+            inexact: 0,
+            worst_error: T::zero(),
             unaudited: 0,
             power: motor_power(model, ws),
         }
@@ -276,10 +294,13 @@ pub(crate) fn metered_adaptive<T: Real>(
 
 /// One fixed step of `h` from `(t, y)` in `substeps` DP5 steps of `h / substeps` (the
 /// last landing on `t + h` bitwise), with its energy balance checked against `start`,
-/// the balance at `(t, y)`. Returns the balance at the end, or an error (the caller
-/// restores the last good state): an evaluation's, [`StepError::EnergyBalance`], or a
-/// non-finite work. Energies that are not finite are left to the caller's check of the
-/// outputs, which names them.
+/// the balance at `(t, y)`, and each sub-step's error estimate against its share
+/// `1/substeps` of the local tolerance `tol` ([`local_tolerance`]). Returns the balance
+/// at the end with the largest relative estimate, or why not (the caller restores the
+/// last good state): an evaluation's error, [`StepError::EnergyBalance`], a non-finite
+/// work, or (when `enforce`) an estimate over the tolerance. Energies that are not
+/// finite are left to the caller's check of the outputs, which names them.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn audited_step<T: Real>(
     sys: &mut Equations<'_, T>,
     dp5: &mut Dp5<T, STATE_DIM>,
@@ -288,11 +309,14 @@ pub(crate) fn audited_step<T: Real>(
     h: T,
     substeps: u32,
     start: &Balance<T>,
-) -> Result<Balance<T>, StepError> {
+    (tol, enforce): ((T, T), bool),
+) -> Result<Audited<T>, Refused<T>> {
     let (t0, t_end) = (*t, *t + h);
     let n = substeps.max(1);
     let mut meter = Metered::new(sys);
     let (mut motor, mut load, mut power) = (T::zero(), T::zero(), start.power);
+    let share = T::one() / T::c(f64::from(n));
+    let mut error = T::zero();
     for k in 1..=n {
         // `t0 + h·k/n` (k/n exact: n is a power of 2); the step `t_k - t` is exact
         // (Sterbenz), so each sub-step lands on its `t_k` and the last on `t + h`.
@@ -304,7 +328,11 @@ pub(crate) fn audited_step<T: Real>(
         let h_k = t_k - *t;
         let poses = LoadPoses::at(meter.eq.model, meter.eq.ws);
         meter.evals = 0;
-        dp5.step(&mut meter, t, y, h_k)?;
+        let report = dp5.step(&mut meter, t, y, h_k)?;
+        let size = y.iter().fold(T::zero(), |m, v| m.max(v.abs()));
+        // A NaN estimate counts as over (the outputs' check names a NaN state).
+        let ratio = report.error / (local_tolerance(tol, size) * share);
+        error = if ratio <= error { error } else { ratio };
         let (w, p) = meter.work(h_k, power);
         motor += w;
         power = p;
@@ -322,54 +350,34 @@ pub(crate) fn audited_step<T: Real>(
         ..*start
     };
     if !(e.kinetic.finite() && e.potential.finite()) {
-        return Ok(end);
+        return Ok(Audited {
+            balance: end,
+            error,
+        });
     }
     if !(end.motor_work.finite() && end.load_work.finite() && power.finite()) {
-        return Err(StepError::NonFinite {
+        return Err(Refused::Step(StepError::NonFinite {
             time: t_end.to_f64(),
             what: "the work of the motors or loads (their power overflows)",
-        });
+        }));
     }
     // Work in minus energy gained over the step.
     let residual = motor + load - ((e.kinetic - start.kinetic) + (e.potential - start.potential));
     let scale = end.scale();
     if !(residual.abs() <= tolerance::<T>() * scale) {
-        return Err(StepError::EnergyBalance {
+        return Err(Refused::Step(StepError::EnergyBalance {
             time: t0.to_f64(),
             residual: residual.to_f64(),
             scale: scale.to_f64(),
             substeps: n,
-        });
+        }));
+    }
+    if enforce && !(error <= T::one()) {
+        return Err(Refused::Inaccurate(error));
     }
     end.worst = end.worst.max(residual.abs() / scale);
-    if n > 1 {
-        end.redone = end.redone.saturating_add(1);
-        end.substeps = end.substeps.saturating_add(u64::from(n));
-    }
-    Ok(end)
-}
-
-/// Takes one fixed step by `attempt(n)` (a step in `n` sub-steps, see [`audited_step`]):
-/// undivided first; if that breaks the energy balance, in each finer division of
-/// [`SUBSTEPS`] in turn until one passes. A division may fail otherwise (a group's
-/// fault, a non-finite value: a coarse step's stages can land far off); the next one
-/// is tried all the same. When none passes, the error is the energy balance's, with the
-/// residual of the finest division that reached the step's end. An undivided step that
-/// fails otherwise fails with its own error.
-pub(crate) fn redo_in_substeps<T: Real>(
-    mut attempt: impl FnMut(u32) -> Result<Balance<T>, StepError>,
-) -> Result<Balance<T>, StepError> {
-    let [first, finer @ ..] = SUBSTEPS;
-    let mut broken = match attempt(first) {
-        Err(e @ StepError::EnergyBalance { .. }) => e,
-        other => return other,
-    };
-    for n in finer {
-        match attempt(n) {
-            Ok(b) => return Ok(b),
-            Err(e @ StepError::EnergyBalance { .. }) => broken = e,
-            Err(_) => {}
-        }
-    }
-    Err(broken)
+    Ok(Audited {
+        balance: end,
+        error,
+    })
 }

@@ -2,7 +2,7 @@
 //! Dormand-Prince integrator (SPEC 1, thesis 5.2). Each [`Simulation::step`] either
 //! advances the state or returns an error and keeps the last good state.
 
-use crate::balance::{audited_step, metered_adaptive, redo_in_substeps, Balance, LoadPoses};
+use crate::balance::{audited_step, metered_adaptive, Balance, LoadPoses};
 use crate::config::{MAX_DOF, STATE_DIM};
 use crate::dynamics::{energy, finish_accelerations, forward, generalized_accelerations, Energy};
 use crate::error::{ModelError, StepError};
@@ -16,7 +16,10 @@ use core::fmt;
 use nalgebra::SVector;
 
 pub mod singular;
+pub mod substeps;
 pub mod switch;
+
+use substeps::{redo_in_substeps, LOCAL_ATOL, LOCAL_RTOL};
 
 /// Why a simulation could not be set up.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -99,6 +102,9 @@ pub struct Simulation<T: Real> {
     /// The end time set by [`Simulation::end_at`]: the step that would pass it lands on
     /// it.
     end: Option<T>,
+    /// The local error allowed for one fixed step ([`substeps`]): absolute (state
+    /// units) and relative to the state's max-norm.
+    local_tol: (T, T),
 }
 
 impl<T: Real> Simulation<T> {
@@ -136,6 +142,7 @@ impl<T: Real> Simulation<T> {
             steps: 0,
             balance,
             end: None,
+            local_tol: (T::c(LOCAL_ATOL), T::c(LOCAL_RTOL)),
         })
     }
 
@@ -149,18 +156,41 @@ impl<T: Real> Simulation<T> {
     /// by Sterbenz's lemma once `t > 0`, so `t + step` lands on `(n+1)h` and the FSAL
     /// stage stays valid.
     ///
-    /// The step's energy balance is checked ([`balance`](crate::balance)): a step that
-    /// breaks it is redone in 4, then 16 sub-steps (still landing on `(n+1)h`); one
-    /// that breaks it even so fails with [`StepError::EnergyBalance`].
+    /// The step's energy balance ([`balance`](crate::balance)) and its local error
+    /// ([`substeps`]) are checked: a step that breaks either is redone in 4, then 16
+    /// sub-steps (still landing on `(n+1)h`); one that breaks the balance even so fails
+    /// with [`StepError::EnergyBalance`], one over the local tolerance even so is
+    /// accepted and counted ([`Balance::inexact`]).
     pub fn step(&mut self) -> Result<(), StepError> {
         let start = self.balance;
-        self.balance = redo_in_substeps(|n| {
+        let tol = self.local_tol;
+        self.balance = redo_in_substeps(|n, enforce| {
             self.advance(
-                |sys, dp5, t, y, h| audited_step(sys, dp5, t, y, h, n, &start),
-                |e| e,
+                |sys, dp5, t, y, h| audited_step(sys, dp5, t, y, h, n, &start, (tol, enforce)),
+                substeps::Refused::Step,
             )
         })?;
         Ok(())
+    }
+
+    /// Sets the local error allowed for one fixed step ([`substeps`]; defaults
+    /// [`LOCAL_ATOL`](substeps::LOCAL_ATOL), [`LOCAL_RTOL`](substeps::LOCAL_RTOL)):
+    /// `atol` in the state's units (rad, m, rad/s, m/s) plus `rtol` of the state's
+    /// max-norm. `atol = ∞` checks the energy balance only. Errors: `atol` is NaN or not
+    /// positive, `rtol` NaN or negative.
+    pub fn set_local_tolerance(&mut self, atol: T, rtol: T) -> Result<(), SetupError> {
+        if !(atol > T::zero() && rtol >= T::zero()) {
+            return Err(SetupError::Setting(
+                "local tolerance: atol must be positive, rtol not negative",
+            ));
+        }
+        self.local_tol = (atol, rtol);
+        Ok(())
+    }
+
+    /// The local error allowed for one fixed step: `(atol, rtol)`.
+    pub fn local_tolerance(&self) -> (T, T) {
+        self.local_tol
     }
 
     /// Advances to the next output time `(n+1)·h` with the adaptive DP5(4) `adaptive`

@@ -124,6 +124,9 @@ pub enum RunError {
         /// What the integrator reported.
         error: String,
     },
+    /// A batch's or a sweep's run not started: SIGINT or SIGTERM came first (exit code
+    /// 130, as the interrupted runs').
+    NotRun,
     /// Writing the CSV failed: exit code 1.
     Write {
         /// The file's path, or `stdout`.
@@ -138,6 +141,7 @@ impl RunError {
     pub fn exit_code(&self) -> u8 {
         match self {
             RunError::Usage(_) => EXIT_USAGE,
+            RunError::NotRun => EXIT_INTERRUPTED,
             _ => EXIT_FAILURE,
         }
     }
@@ -177,6 +181,9 @@ impl fmt::Display for RunError {
                 "output interval {} failed ({rows} rows written): the adaptive integrator: {error}",
                 steps + 1
             ),
+            RunError::NotRun => {
+                f.write_str("not run: interrupted (SIGINT or SIGTERM) before it started")
+            }
             RunError::Write { target, error } => write!(f, "cannot write {target}: {error}"),
         }
     }

@@ -177,3 +177,45 @@ fn no_progress_off_a_terminal() {
         String::from_utf8_lossy(&out.stderr)
     );
 }
+
+/// A batch stopped by SIGINT: the run under way finishes its rows and its whole CSV,
+/// the runs not started are not run, `batch.csv` is whole and says which ("interrupted",
+/// "not run", exit 130 each), the summary says interrupted and the exit status is 130.
+#[test]
+fn sigint_stops_a_batch_with_whole_files() {
+    let dir = TempDir::new("whole-batch");
+    let file = dir.join("runs.txt");
+    std::fs::write(
+        &file,
+        "slider-crank --t-end 100000\nslider-crank --t-end 100000\nslider-crank\n",
+    )
+    .expect("write");
+    let out = dir.join("out");
+    let table = std::path::Path::new(&out).join("batch.csv");
+    let (code, summary, err) = interrupt(
+        &["batch", &file, "--out-dir", &out, "--threads", "1"],
+        &table,
+        "INT",
+    );
+    assert_eq!(code, 130, "{summary}{err}");
+    assert!(summary.contains("batch     interrupted"), "{summary}");
+    let text = std::fs::read_to_string(&table).expect("the table");
+    let rows: Vec<Vec<&str>> = text
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').collect())
+        .collect();
+    assert_eq!(rows.len(), 3, "{text}");
+    // job, line, scenario, args, file, exit, end, ...
+    assert_eq!((rows[0][5], rows[0][6]), ("130", "interrupted"), "{text}");
+    for r in &rows[1..] {
+        assert_eq!((r[5], r[6]), ("130", "not run"), "{text}");
+    }
+    let csv = std::fs::read_to_string(std::path::Path::new(&out).join(rows[0][4]))
+        .expect("the interrupted run's CSV");
+    let (_, data) = numeric_csv(&csv);
+    assert!(data.len() > 10 && data.iter().flatten().all(|v| v.is_finite()));
+    // Only the table and the interrupted run's CSV: no temporary file, none of the
+    // runs that did not start.
+    assert_eq!(common::files(std::path::Path::new(&out)).len(), 2);
+}

@@ -34,9 +34,33 @@ impl<T: Real> Simulation<T> {
     /// failing end is returned, s). `None` if the whole step succeeds, or the state's
     /// own evaluation fails. `scratch` is overwritten; the simulation is untouched.
     pub fn locate_failure(&self, scratch: &mut Workspace<T>) -> Option<T> {
-        let t_next = T::c((self.steps + 1) as f64) * self.h;
+        self.locate(scratch, 1).map(|(t, _)| t)
+    }
+
+    /// Where the motion from the current state meets a singularity of the mechanism
+    /// within `steps` step lengths (1: inside the next step): the time of
+    /// [`Simulation::locate_failure`] over that span with the failing trial's error
+    /// there (its time set to the located one), if that error is one
+    /// [`at_singularity`]. A step that failed otherwise (its energy balance broken by
+    /// the speeds' run-up to a singular pose just past its end, say) ends at the
+    /// singularity all the same when a trial over 2 step lengths meets it. `None` if no
+    /// trial fails, or fails otherwise.
+    pub fn locate_singularity(
+        &self,
+        scratch: &mut Workspace<T>,
+        steps: u32,
+    ) -> Option<(T, StepError)> {
+        self.locate(scratch, steps)
+            .filter(|(_, e)| at_singularity(e))
+            .map(|(t, e)| (t, e.at_time(t.to_f64())))
+    }
+
+    /// The located time within `steps` step lengths and the error of the failing trial
+    /// at the bracket's end.
+    fn locate(&self, scratch: &mut Workspace<T>, steps: u32) -> Option<(T, StepError)> {
+        let t_next = T::c(self.steps.saturating_add(u64::from(steps.max(1))) as f64) * self.h;
         let h = t_next - self.t;
-        let trial = |size: T, scratch: &mut Workspace<T>| -> bool {
+        let trial = |size: T, scratch: &mut Workspace<T>| -> Result<(), StepError> {
             scratch.clone_from(&self.ws);
             let mut dp5 = Dp5::<T, STATE_DIM>::new();
             let (mut t, mut y) = (self.t, self.y);
@@ -44,21 +68,21 @@ impl<T: Real> Simulation<T> {
                 model: &self.model,
                 ws: scratch,
             };
-            dp5.step(&mut sys, &mut t, &mut y, size).is_ok()
+            dp5.step(&mut sys, &mut t, &mut y, size).map(|_| ())
         };
-        if trial(h, scratch) {
-            return None;
-        }
+        let mut failure = trial(h, scratch).err()?;
         let (mut lo, mut hi) = (T::zero(), h);
         let half = T::c(0.5);
         for _ in 0..LOCATE_HALVINGS {
             let mid = (lo + hi) * half;
-            if trial(mid, scratch) {
-                lo = mid;
-            } else {
-                hi = mid;
+            match trial(mid, scratch) {
+                Ok(()) => lo = mid,
+                Err(e) => {
+                    hi = mid;
+                    failure = e;
+                }
             }
         }
-        Some(self.t + hi)
+        Some((self.t + hi, failure))
     }
 }

@@ -62,8 +62,11 @@ Every run: h <= t_end (else exit status 2); when t_end is not a multiple of h, t
   when the run is over (a crash leaves no half file); the pictures of a failed run are
   not written; an output that names the run file is refused. Ctrl-C (SIGINT) or SIGTERM:
   the run finishes its row, completes its CSV and logs, prints its summary marked
-  interrupted and exits with status 130 (a second signal ends it at once). On a
-  terminal a long run shows its progress on stderr.
+  interrupted and exits with status 130 (a second signal ends it at once); in a batch
+  or a sweep the runs under way stop so, the others are not started (end: not run),
+  and it exits 130. A run that meets a singularity of the mechanism ends there, located
+  inside the step, with exit status 0 (end: singularity). On a terminal a long run
+  shows its progress on stderr.
 
 Run files (TOML; the full reference with every key: host-sim/scenarios/README.md).
   SI units (m, kg, kg·m², s, N, N·m, rad/s); angles in degrees in keys ending in _deg,

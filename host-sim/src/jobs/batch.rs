@@ -19,6 +19,7 @@ use crate::model::scenarios::Source;
 use crate::options::args::parse_run_line;
 use crate::options::{BatchOptions, RunOptions, Steps};
 use crate::run::converter::{CccSummary, End};
+use crate::run::interrupt;
 use crate::run::mechanism::Summary;
 use crate::run::{self, Report};
 use std::borrow::Cow;
@@ -146,6 +147,7 @@ impl Outcome {
     pub fn end(&self) -> &'static str {
         match self {
             Outcome::Mechanism(Ok(s)) if s.interrupted => "interrupted",
+            Outcome::Mechanism(Ok(s)) if s.singular.is_some() => "singularity",
             Outcome::Converter(Ok(CccSummary {
                 end: End::Interrupted,
                 ..
@@ -160,6 +162,8 @@ impl Outcome {
             | Outcome::Mechanism(Err(RunError::Step { .. } | RunError::Integrator { .. })) => {
                 "failed"
             }
+            Outcome::Mechanism(Err(RunError::NotRun))
+            | Outcome::Converter(Err(RunError::NotRun)) => "not run",
             Outcome::Mechanism(Err(_)) | Outcome::Converter(Err(_)) => "error",
         }
     }
@@ -332,6 +336,11 @@ pub fn execute(opts: &BatchOptions, stdout: &mut dyn Write, stderr: &mut dyn Wri
         &runs,
         opts.threads,
         |job, run: &BatchRun| {
+            // SIGINT or SIGTERM: the runs under way finish their rows and files as
+            // interrupted; the others do not start.
+            if interrupt::requested() {
+                return Outcome::of(&run.opts, Err(RunError::NotRun));
+            }
             run_one(
                 &run.opts,
                 &dir.join(file_name(job, total, &run.opts.scenario)),
@@ -363,8 +372,12 @@ pub fn execute(opts: &BatchOptions, stdout: &mut dyn Write, stderr: &mut dyn Wri
         let _ = writeln!(stderr, "host-sim: cannot write {}: {e}", table.display());
         return EXIT_FAILURE;
     }
+    let stopped = interrupt::requested();
     let mut failed = 0;
     for (job, (run, outcome)) in runs.iter().zip(&outcomes).enumerate() {
+        if stopped && outcome.exit_code() == EXIT_INTERRUPTED {
+            continue;
+        }
         if outcome.exit_code() != EXIT_OK {
             failed += 1;
             let _ = writeln!(
@@ -376,19 +389,31 @@ pub fn execute(opts: &BatchOptions, stdout: &mut dyn Write, stderr: &mut dyn Wri
             );
         }
     }
+    let cut = outcomes
+        .iter()
+        .filter(|o| o.exit_code() == EXIT_INTERRUPTED)
+        .count();
     if !opts.quiet {
+        if stopped {
+            let _ = writeln!(
+                stdout,
+                "batch     interrupted (SIGINT or SIGTERM): {cut} of {total} runs interrupted or not run (the table's end column says which); the files hold the runs up to there"
+            );
+        }
         let threads = opts.threads.clamp(1, total);
         let _ = writeln!(
             stdout,
             "batch     {total} runs of {file} on {threads} thread{} in {:.3} s: {} succeeded, {failed} failed\ntable     {}",
             if threads == 1 { "" } else { "s" },
             wall.as_secs_f64(),
-            total - failed,
+            total - failed - if stopped { cut } else { 0 },
             table.display()
         )
         .and_then(|_| stdout.flush());
     }
-    if failed == 0 {
+    if stopped {
+        EXIT_INTERRUPTED
+    } else if failed == 0 {
         EXIT_OK
     } else {
         EXIT_FAILURE

@@ -38,10 +38,11 @@
 use super::batch::{self, cell};
 use super::pool::run_jobs;
 use crate::draw;
-use crate::error::{RunError, EXIT_FAILURE, EXIT_OK, EXIT_USAGE, HINT};
+use crate::error::{RunError, EXIT_FAILURE, EXIT_INTERRUPTED, EXIT_OK, EXIT_USAGE, HINT};
 use crate::model::runfile::{self, set_dotted_in as set_dotted};
 use crate::model::scenarios::{ScenarioId, Source};
 use crate::options::{ProgressStyle, RunOptions, Steps, SweepOptions, MAX_THREADS};
+use crate::run::interrupt;
 use std::fmt;
 use std::fs::{self, File};
 use std::io::{self, BufWriter, IsTerminal, Write};
@@ -766,6 +767,11 @@ pub fn execute(opts: &SweepOptions, stdout: &mut dyn Write, stderr: &mut dyn Wri
         &jobs,
         threads,
         |k, job: &Job| {
+            // SIGINT or SIGTERM: the runs under way finish as interrupted; the others do
+            // not start.
+            if interrupt::requested() {
+                return Outcome::from(&batch::Outcome::of(&job.opts, Err(RunError::NotRun)));
+            }
             let o = if opts.keep_runs {
                 let src = &job.opts.scenario;
                 batch::run_one(&job.opts, &out.join(batch::file_name(k, total, src)))
@@ -820,8 +826,9 @@ pub fn execute(opts: &SweepOptions, stdout: &mut dyn Write, stderr: &mut dyn Wri
             pictures.push(out.join(format!("{stem}.svg")));
         }
     }
+    let stopped = interrupt::requested();
     let failed: Vec<usize> = (0..runs.len())
-        .filter(|&k| runs[k].exit != EXIT_OK)
+        .filter(|&k| runs[k].exit != EXIT_OK && !(stopped && runs[k].exit == EXIT_INTERRUPTED))
         .collect();
     for &k in &failed {
         let _ = writeln!(
@@ -842,8 +849,18 @@ pub fn execute(opts: &SweepOptions, stdout: &mut dyn Write, stderr: &mut dyn Wri
             &table,
             &pictures,
         );
+        if stopped {
+            let _ = writeln!(
+                stdout,
+                "sweep     interrupted (SIGINT or SIGTERM): the table's end column says which runs were interrupted or not run"
+            );
+        }
     }
-    EXIT_OK
+    if stopped {
+        EXIT_INTERRUPTED
+    } else {
+        EXIT_OK
+    }
 }
 
 /// Every variant's run options, from its run file; errors: every bad variant, named by
@@ -911,18 +928,25 @@ fn report(
 ) -> io::Result<()> {
     let total = runs.len();
     // How they ended, in batch.csv's words; "0 completed" is said, other zeros not.
-    let ends = ["completed", "singularity", "failed", "error"]
-        .iter()
-        .filter_map(|&end| {
-            let n = runs.iter().filter(|o| o.end == end).count();
-            let what = match end {
-                "singularity" => "at a singularity of the mechanism",
-                other => other,
-            };
-            (n > 0 || end == "completed").then(|| format!("{n} {what}"))
-        })
-        .collect::<Vec<_>>()
-        .join(", ");
+    let ends = [
+        "completed",
+        "singularity",
+        "failed",
+        "error",
+        "interrupted",
+        "not run",
+    ]
+    .iter()
+    .filter_map(|&end| {
+        let n = runs.iter().filter(|o| o.end == end).count();
+        let what = match end {
+            "singularity" => "at a singularity of the mechanism",
+            other => other,
+        };
+        (n > 0 || end == "completed").then(|| format!("{n} {what}"))
+    })
+    .collect::<Vec<_>>()
+    .join(", ");
     let axes = sweep
         .axes
         .iter()

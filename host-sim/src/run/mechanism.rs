@@ -34,6 +34,32 @@ pub struct MeanSpeed {
     pub angular: bool,
 }
 
+/// A run's end at a singularity of the mechanism.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SingularEnd {
+    /// The located time, s (inside the step after the last state written).
+    pub time: f64,
+    /// The group and the cause (`group RRR(2,3): ...`), or the mass matrix's.
+    pub cause: String,
+}
+
+impl SingularEnd {
+    /// The end the core's error `e` (its time located) describes.
+    fn of(e: &StepError) -> Self {
+        let cause = match e {
+            StepError::Group { group, fault, .. } => format!("group {group}: {fault}"),
+            StepError::SingularMassMatrix { .. } => {
+                "the reduced mass matrix is singular".to_string()
+            }
+            other => other.to_string(),
+        };
+        SingularEnd {
+            time: e.time(),
+            cause,
+        }
+    }
+}
+
 /// The largest reaction force magnitude of a run.
 #[derive(Clone, Debug, PartialEq)]
 pub struct MaxReaction {
@@ -61,6 +87,15 @@ pub struct Metered {
     pub redone: u64,
     /// Sub-steps taken by them.
     pub substeps: u64,
+    /// Steps redone because a coarser division broke the energy balance.
+    pub redone_energy: u64,
+    /// Steps redone because a coarser division's error estimate was over the local
+    /// tolerance (`structomat::simulation::substeps`).
+    pub redone_error: u64,
+    /// Steps accepted in 16 sub-steps with their error estimate still over it.
+    pub inexact: u64,
+    /// The largest accepted error estimate relative to the local tolerance.
+    pub worst_error: f64,
 }
 
 /// What a run did (printed as a few lines by its `Display`).
@@ -93,6 +128,9 @@ pub struct Summary {
     /// Whether SIGINT or SIGTERM stopped the run before `t_end` (after the row of its
     /// last state was written).
     pub interrupted: bool,
+    /// Where the run ended at a singularity of the mechanism (the constraints losing
+    /// rank), located inside the step that met it: its expected end, exit status 0.
+    pub singular: Option<SingularEnd>,
     /// The motors' warnings: a characteristic that rises again past a speed (set-up),
     /// a motor driven out of its working zone (the first time, with its numbers).
     pub warnings: Vec<String>,
@@ -164,6 +202,14 @@ impl fmt::Display for Summary {
                 Fig(self.time)
             )?;
         }
+        if let Some(end) = &self.singular {
+            writeln!(
+                f,
+                "end       ended at a singularity at t = {} s ({}); the files hold the run up to the last step before it",
+                Sci(end.time),
+                end.cause
+            )?;
+        }
         if let Some((accepted, rejected)) = self.adaptive {
             writeln!(
                 f,
@@ -214,11 +260,22 @@ impl fmt::Display for Summary {
             -b.residual
         )?;
         match self.adaptive {
-            None => writeln!(
-                f,
-                "; worst step {:.1e} of its energy scale, {} steps redone in {} sub-steps",
-                b.worst, b.redone, b.substeps
-            )?,
+            None => {
+                writeln!(f, "; worst step {:.1e} of its energy scale", b.worst)?;
+                writeln!(
+                    f,
+                    "substeps  {} steps redone in {} sub-steps: {} for the energy balance, {} for the local error (DP5's 5(4) estimate)",
+                    b.redone, b.substeps, b.redone_energy, b.redone_error
+                )?;
+                if b.inexact > 0 {
+                    writeln!(
+                        f,
+                        "warning   {} steps over the local error tolerance even in 16 sub-steps (the worst at {:.1e} times it): the motion is too fast for h there; a smaller h is more accurate",
+                        b.inexact,
+                        b.worst_error
+                    )?;
+                }
+            }
             Some(_) => writeln!(
                 f,
                 " (adaptive steps: kept by the error control, not checked)"
@@ -407,8 +464,9 @@ pub fn simulate<T: Real>(
     let wall = start.elapsed();
     progress.finish();
     obs.on_end()?;
-    let interrupted = match outcome {
-        Ok(stop) => stop,
+    let (interrupted, singular) = match outcome {
+        Ok(stop) => (stop, None),
+        Err(Failure::Singular(e)) => (false, Some(SingularEnd::of(&e))),
         Err(Failure::Step {
             kinetostatics,
             error,
@@ -464,6 +522,7 @@ pub fn simulate<T: Real>(
         energy_start,
         energy_end: (e1.kinetic.to_f64(), e1.potential.to_f64()),
         interrupted,
+        singular,
         warnings: motors.warnings,
         balance: {
             let b = sim.balance();
@@ -474,6 +533,10 @@ pub fn simulate<T: Real>(
                 worst: b.worst.to_f64(),
                 redone: b.redone,
                 substeps: b.substeps,
+                redone_energy: b.redone_energy,
+                redone_error: b.redone_error,
+                inexact: b.inexact,
+                worst_error: b.worst_error.to_f64(),
             }
         },
         max_reaction: max.map(|(k, value, time)| MaxReaction {
@@ -585,6 +648,9 @@ enum Failure {
     },
     /// The adaptive integrator gave up.
     Integrator(String),
+    /// The next step met a singularity of the mechanism, located inside it: the run's
+    /// end (the error's time is the located one).
+    Singular(StepError),
 }
 
 impl Failure {
@@ -596,20 +662,22 @@ impl Failure {
         }
     }
 
-    /// A step's failure at a singularity of the mechanism with the time located inside
-    /// the step ([`Simulation::locate_failure`]); the others as they are.
+    /// A step's failure at a singularity of the mechanism (or its energy balance broken
+    /// on the way into one) with the time located inside the step
+    /// ([`Simulation::locate_singularity`]): [`Failure::Singular`]; the others as they
+    /// are.
     fn located<T: Real>(self, sim: &Simulation<T>) -> Self {
         match self {
             Failure::Step {
                 kinetostatics: false,
                 error,
-            } if at_singularity(&error) => {
+            } if at_singularity(&error) || matches!(error, StepError::EnergyBalance { .. }) => {
                 let mut scratch = Box::new(structomat::Workspace::new());
-                let error = match sim.locate_failure(&mut scratch) {
-                    Some(t) => error.at_time(t.to_f64()),
-                    None => error,
-                };
-                Failure::step(error)
+                let span = if at_singularity(&error) { 1 } else { 2 };
+                match sim.locate_singularity(&mut scratch, span) {
+                    Some((_, e)) => Failure::Singular(e),
+                    None => Failure::step(error),
+                }
             }
             f => f,
         }
