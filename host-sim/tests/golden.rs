@@ -114,7 +114,7 @@ const PINS: &[Pin<'static>] = &[
     Pin {
         args: "five-bar --f32",
         exit: 0,
-        csv: "d7e131df570646948ba20ee85b0482e4fd70814a30af486e8c361f658ac8c6f6",
+        csv: "d6c98d5e67676b19f8af8ba6a689f97aa8df4042866393b53d1cea60919d3947",
         logs: None,
     },
     Pin {
@@ -129,10 +129,10 @@ const PINS: &[Pin<'static>] = &[
     Pin {
         args: "ccc-s2 --f32",
         exit: 0,
-        csv: "40638fd57da180a4847e1e1f1d39fe5e3d34bafbab9b8c141367aabfeef2a9bc",
+        csv: "660cce81800a4c5cc43440297a555b10facb823c0c2d048e855cdc3cc8afdf03",
         logs: Some((
-            "5a0d2a90b70b5b8610f82a5dbc3767b4546e5d234c4960593ddaa66a944372bb",
-            "3606cd6bd5ac3e5ea930bb345f55e4512511b15b9772bffe349cc4950b0f0e0c",
+            "b30b72e69e6267ee27bb40dbf5e1f1ff6d3979378b04facff1f95f37fe109f8e",
+            "182838542b115ce271cc9c5cc0e3baac26be639c8ef19fead393dca675127f60",
         )),
     },
 ];
