@@ -76,7 +76,7 @@ pub struct Balance<T> {
     /// Steps redone because a coarser division broke the energy balance.
     pub redone_energy: u64,
     /// Steps redone because a coarser division's error estimate exceeded the local
-    /// tolerance ([`local_tolerance`](crate::simulation::substeps::local_tolerance)).
+    /// tolerance ([`local_tolerance`]).
     pub redone_error: u64,
     /// Steps accepted in the finest division with an error estimate still over the
     /// local tolerance.

@@ -174,7 +174,7 @@ impl<T: Real> Simulation<T> {
     }
 
     /// Sets the local error allowed for one fixed step ([`substeps`]; defaults
-    /// [`LOCAL_ATOL`](substeps::LOCAL_ATOL), [`LOCAL_RTOL`](substeps::LOCAL_RTOL)):
+    /// [`LOCAL_ATOL`], [`LOCAL_RTOL`]):
     /// `atol` in the state's units (rad, m, rad/s, m/s) plus `rtol` of the state's
     /// max-norm. `atol = ∞` checks the energy balance only. Errors: `atol` is NaN or not
     /// positive, `rtol` NaN or negative.

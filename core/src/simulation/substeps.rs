@@ -21,7 +21,7 @@
 //! factor of order `h / T` (`T` the motion's time scale). Keeping every step's estimate
 //! under `tol` keeps the global error of the 5th-order solution well under the sum of
 //! the estimates, `N·tol` over `N` steps, times the motion's growth of errors.
-//! [`LOCAL_TOL`] is chosen on the README's main job (the five-bar at h = 1 ms, its
+//! [`LOCAL_ATOL`] and [`LOCAL_RTOL`] are chosen on the README's main job (the five-bar at h = 1 ms, its
 //! q1(0.5 s) and q1(1 s) within 1e-8 rad of an adaptive rtol 1e-12 run, with margin:
 //! see `host-sim/tests/main_job.rs`).
 
