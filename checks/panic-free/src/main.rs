@@ -15,8 +15,9 @@
 //! - [`Twin::new_in`] (and [`Twin::new`], feature `twin-by-value`) with arbitrary
 //!   parameters and settings, [`Twin::step`] with arbitrary inputs, and the twin's
 //!   output accessors;
-//! - the generic core: building the thesis's five-bar, [`Simulation::step`] and the
-//!   kinetostatics.
+//! - the generic core: building the thesis's five-bar, [`Simulation::step`] (through
+//!   the dead-point switching's `Alternatives::step`), the kinetostatics, and the first
+//!   model's evaluation while an alternative drives (`Alternatives::first_evaluation`).
 #![no_std]
 #![no_main]
 
@@ -26,6 +27,7 @@ use core::panic::PanicInfo;
 use structomat::ccc::{CccParams, Inputs, MotorInput, Twin, TwinSettings};
 use structomat::motor::Motor;
 use structomat::Real;
+use structomat::simulation::switch::{Alternatives, SwitchSettings};
 
 // On the host `main` is called by the C runtime: link libc (a no_std binary gets
 // `-nodefaultlibs`). On bare metal `build.rs` makes `main` the entry point.
@@ -113,12 +115,23 @@ fn five_bar<T: Real>(steps: u32) -> T {
         return T::zero();
     };
     let mut sum = T::zero();
+    // The dead-point switching, with the model itself as its one alternative (the
+    // optimiser cannot tell it from another choice of coordinates).
+    let Ok(mut alts) = Alternatives::<T, 2>::new(&sim, SwitchSettings::default()) else {
+        return T::zero();
+    };
+    if alts.add(black_box(sim.model().clone())).is_err() {
+        return T::zero();
+    }
     for _ in 0..black_box(steps) {
-        if sim.step().is_err() {
+        if alts.step(&mut sim).is_err() {
             sum += T::one();
         }
         if sim.kinetostatics().is_err() {
             sum += T::one();
+        }
+        if let Some((_, ws)) = alts.first_evaluation(&sim) {
+            sum += ws.qdd[0] + ws.motor[0];
         }
         for v in sim.q() {
             sum += *v;

@@ -20,12 +20,13 @@
 //! poses, and the switch is refused if any link lands more than a tolerance away.
 
 use super::singular::at_singularity;
-use super::{check_outputs, Simulation};
+use super::{check_outputs, check_reactions, Simulation};
 use crate::balance::Balance;
 use crate::config::{MAX_DOF, MAX_GROUPS};
-use crate::dynamics::forward;
+use crate::dynamics::{finish_accelerations, forward};
 use crate::error::{GroupFault, GroupId, ModelError, StepError};
 use crate::kinematics::{assemble_near, group_id};
+use crate::kinetostatics::reactions;
 use crate::model::Model;
 use crate::scalar::{perp, rotate_cs, Real};
 use crate::structomat::{GroupKind, Term};
@@ -171,6 +172,50 @@ impl<T: Real, const N: usize> Alternatives<T, N> {
                 (q, qd)
             }
         }
+    }
+
+    /// The first model evaluated at `sim`'s physical state while an alternative drives
+    /// (`None` while the first model is in use, or where it does not evaluate: exactly
+    /// at its dead point, where its coordinates do not place the links). Its workspace
+    /// holds the first coordinates, rates and accelerations read off the links (the
+    /// accelerations those the alternative solved, [`motion`]), the motors' torques
+    /// (each motor's law reads its joint's relative motion, the same in either model),
+    /// and the reactions of the first model's kinetostatics at that motion: the joints
+    /// are the mechanism's own, loaded as in the machine, the motors' torques at their
+    /// joints and none at the alternative's driven joint (whose kinetostatics puts
+    /// there the torque its coordinate would need, a torque no motor applies). The
+    /// first drivers' driving torques are then the torques the first coordinates would
+    /// need for the motion, the motors' own (virtual power). Valid until the next step
+    /// (it shares the candidates' scratch workspace).
+    pub fn first_evaluation(&mut self, sim: &Simulation<T>) -> Option<(&Model<T>, &Workspace<T>)> {
+        if self.active == 0 {
+            return None;
+        }
+        let model = self.models.first()?;
+        let (q, qd, qdd) = motion(model, &sim.ws.body, Some(&self.first_q))?;
+        let m = model.dof();
+        let (q_, qd_, qdd_) = (q.get(..m)?, qd.get(..m)?, qdd.get(..m)?);
+        let ws = &mut self.scratch;
+        assemble_near(model, ws, q_, &sim.ws.body).ok()?;
+        forward(model, ws, sim.t, q_, qd_).ok()?;
+        // The accelerations the alternative solved, in place of the first model's
+        // equations of motion solved again (the same motion; these do not lose
+        // digits to the first coordinates' conditioning).
+        for (d, s) in ws.qdd.iter_mut().zip(qdd_) {
+            *d = *s;
+        }
+        finish_accelerations(model, ws);
+        let time = sim.t.to_f64();
+        check_outputs(model, ws, time).ok()?;
+        reactions(model, ws, time).ok()?;
+        check_reactions(model, ws, time).ok()?;
+        Some((model, &self.scratch))
+    }
+
+    /// The workspace of the last [`Alternatives::first_evaluation`] (or of a
+    /// candidate's trial, if a step came after it).
+    pub fn last_evaluation(&self) -> &Workspace<T> {
+        &self.scratch
     }
 
     /// One step of `sim` ([`Simulation::step`]) in the best coordinates: before it,
@@ -413,20 +458,37 @@ fn coordinates<T: Real>(
     b: &[BodyState<T>],
     reference: Option<&[T; MAX_DOF]>,
 ) -> Option<([T; MAX_DOF], [T; MAX_DOF])> {
-    let (mut q, mut qd) = ([T::zero(); MAX_DOF], [T::zero(); MAX_DOF]);
+    motion(model, b, reference).map(|(q, qd, _)| (q, qd))
+}
+
+/// [`coordinates`] with the coordinates' accelerations: motor element R, its link's
+/// angular acceleration; motor element T, the second derivative of `s = gap · u` with
+/// the guide's direction `u` turning with the guide's body g (`u̇ = ω_g u⊥`):
+/// `s̈ = (a_p - a_g)·u + 2 ω_g (v_p - v_g)·u⊥ - ω_g² gap·u + α_g gap·u⊥`, the points'
+/// accelerations `a + α r⊥ - ω² r`.
+fn motion<T: Real>(
+    model: &Model<T>,
+    b: &[BodyState<T>],
+    reference: Option<&[T; MAX_DOF]>,
+) -> Option<Coordinates<T>> {
+    let (mut q, mut qd, mut qdd) = (
+        [T::zero(); MAX_DOF],
+        [T::zero(); MAX_DOF],
+        [T::zero(); MAX_DOF],
+    );
     for g in model.groups() {
         let Some(c) = g.coord else { continue };
         let c = c as usize;
         let p = g.placements.first()?;
         let link = b.get(p.link as usize)?;
-        let (value, rate) = match g.kind {
+        let (value, rate, acceleration) = match g.kind {
             GroupKind::MotorR => {
                 let raw = link.theta - p.angle.offset;
                 let v = match reference.and_then(|r| r.get(c)) {
                     Some(r) => raw - T::two_pi() * ((raw - *r) / T::two_pi()).round(),
                     None => raw,
                 };
-                (v, link.omega)
+                (v, link.omega, link.alpha)
             }
             GroupKind::MotorT => {
                 let chain = g.chains.first()?;
@@ -448,18 +510,27 @@ fn coordinates<T: Real>(
                 let gap = (link.o + r) - (gb.o + rg);
                 let vp = link.v + perp(&r) * link.omega;
                 let vg = gb.v + perp(&rg) * gb.omega;
+                let ap = link.a + perp(&r) * link.alpha - r * (link.omega * link.omega);
+                let ag = gb.a + perp(&rg) * gb.alpha - rg * (gb.omega * gb.omega);
+                let (un, w) = (perp(&u), gb.omega);
                 (
                     gap.dot(&u),
-                    (vp - vg).dot(&u) + gap.dot(&perp(&u)) * gb.omega,
+                    (vp - vg).dot(&u) + gap.dot(&un) * w,
+                    (ap - ag).dot(&u) + (vp - vg).dot(&un) * (w + w) - gap.dot(&u) * (w * w)
+                        + gap.dot(&un) * gb.alpha,
                 )
             }
             _ => continue,
         };
         *q.get_mut(c)? = value;
         *qd.get_mut(c)? = rate;
+        *qdd.get_mut(c)? = acceleration;
     }
-    Some((q, qd))
+    Some((q, qd, qdd))
 }
+
+/// Coordinates, rates and accelerations.
+type Coordinates<T> = ([T; MAX_DOF], [T; MAX_DOF], [T; MAX_DOF]);
 
 impl<T: Real> Simulation<T> {
     /// Takes `model` as the simulation's model at the same time and physical state, in

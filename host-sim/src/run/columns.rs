@@ -4,6 +4,7 @@
 use structomat::kinetostatics::driving_torque;
 use structomat::model::Model;
 use structomat::structomat::JointKind;
+use structomat::workspace::Workspace;
 use structomat::{Real, Simulation};
 
 /// The quantity of one CSV column.
@@ -123,15 +124,26 @@ impl Layout {
     /// The value of `col` at the simulation's current state; the reaction columns read
     /// the last [`Simulation::kinetostatics`] call (make it at the current state).
     pub fn value<T: Real>(col: Column, sim: &Simulation<T>) -> T {
-        let ws = sim.workspace();
+        match col {
+            Column::Time => sim.time(),
+            Column::Q(j) => sim.q().get(j).copied().unwrap_or(T::c(f64::NAN)),
+            Column::Qd(j) => sim.qd().get(j).copied().unwrap_or(T::c(f64::NAN)),
+            Column::Qdd(j) => sim.qdd().get(j).copied().unwrap_or(T::c(f64::NAN)),
+            _ => Layout::read(col, sim.model(), sim.workspace(), sim.time()),
+        }
+    }
+
+    /// The value of `col` in `model`'s evaluation `ws` at time `t` (s): its coordinates,
+    /// motors and reactions (those of the last kinetostatics in `ws`).
+    pub fn read<T: Real>(col: Column, model: &Model<T>, ws: &Workspace<T>, t: T) -> T {
         let nan = T::c(f64::NAN);
         let reaction =
             |group: usize, joint: usize| ws.reactions.get(group).and_then(|r| r.get(joint));
         match col {
-            Column::Time => sim.time(),
-            Column::Q(j) => sim.q().get(j).copied().unwrap_or(nan),
-            Column::Qd(j) => sim.qd().get(j).copied().unwrap_or(nan),
-            Column::Qdd(j) => sim.qdd().get(j).copied().unwrap_or(nan),
+            Column::Time => t,
+            Column::Q(j) => ws.q.get(j).copied().unwrap_or(nan),
+            Column::Qd(j) => ws.qd.get(j).copied().unwrap_or(nan),
+            Column::Qdd(j) => ws.qdd.get(j).copied().unwrap_or(nan),
             Column::Motor(k) => ws.motor.get(k).copied().unwrap_or(nan),
             Column::Revolute { group, joint } => {
                 reaction(group, joint).map_or(nan, |r| r.force.norm())
@@ -140,7 +152,7 @@ impl Layout {
                 reaction(group, joint).map_or(nan, |r| r.force.norm())
             }
             Column::Moment { group, joint } => reaction(group, joint).map_or(nan, |r| r.moment),
-            Column::Drive { group } => driving_torque(sim.model(), ws, group).unwrap_or(nan),
+            Column::Drive { group } => driving_torque(model, ws, group).unwrap_or(nan),
         }
     }
 }

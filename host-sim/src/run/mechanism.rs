@@ -403,6 +403,9 @@ pub fn simulate<T: Real>(
                 error,
             });
         }
+        if let Some(s) = switching.as_mut() {
+            s.evaluate(&sim);
+        }
         let value = |c: Column| {
             switching
                 .as_ref()
@@ -453,6 +456,9 @@ pub fn simulate<T: Real>(
             // The last good state's row, if `--every` skipped it (its kinetostatics
             // passed before the step).
             if steps % every != 0 && sim.kinetostatics().is_ok() {
+                if let Some(s) = switching.as_mut() {
+                    s.evaluate(&sim);
+                }
                 write_row(&layout, &sim, &switching, &mut row, obs)?;
                 rows += 1;
             }
@@ -482,6 +488,9 @@ pub fn simulate<T: Real>(
         Err(Failure::Integrator(error)) => return Err(RunError::Integrator { steps, rows, error }),
     };
     let e1 = sim.energy();
+    if let Some(s) = switching.as_mut() {
+        s.evaluate(&sim);
+    }
     // The first coordinates, also while another choice drives.
     let at = |c: Column| {
         switching

@@ -3,7 +3,7 @@
 //! [`crate::model::alternatives`], the switch log, and the CSV values of the first
 //! coordinates while another choice is in use.
 
-use super::columns::Column;
+use super::columns::{Column, Layout};
 use crate::options::RunOptions;
 use structomat::config::MAX_DOF;
 use structomat::simulation::switch::{Alternatives, SwitchSettings};
@@ -45,6 +45,9 @@ pub struct Switching<T: Real> {
     alts: Box<Alternatives<T, CAPACITY>>,
     /// The switches, in time order.
     pub log: Vec<SwitchRecord>,
+    /// Whether the core's first evaluation ([`Alternatives::first_evaluation`]) holds
+    /// the present state.
+    evaluated: bool,
 }
 
 impl<T: Real> Switching<T> {
@@ -70,11 +73,13 @@ impl<T: Real> Switching<T> {
         Ok(Some(Switching {
             alts,
             log: Vec::new(),
+            evaluated: false,
         }))
     }
 
     /// One step of `sim` in the best coordinates, the switch logged.
     pub fn step(&mut self, sim: &mut Simulation<T>) -> Result<(), StepError> {
+        self.evaluated = false;
         if let Some(s) = self.alts.step(sim)? {
             let name = |k: u8| {
                 self.alts
@@ -97,16 +102,32 @@ impl<T: Real> Switching<T> {
         Ok(())
     }
 
-    /// The value of `col` while an alternative is in use: the first coordinates and
-    /// their rates read off the links; `NaN` for the accelerations, torques and
-    /// reactions, which the alternative's sequence numbers otherwise. `None` while the
-    /// first coordinates are in use (the column's own value holds).
+    /// Evaluates the first model at `sim`'s state while an alternative drives (the
+    /// values [`Switching::value`] reads): call it at each state before its values.
+    pub fn evaluate(&mut self, sim: &Simulation<T>) {
+        self.evaluated = self.alts.first_evaluation(sim).is_some();
+    }
+
+    /// The value of `col` while an alternative is in use, in the run's first
+    /// coordinates and columns: the first model evaluated at the same physical state
+    /// ([`Alternatives::first_evaluation`], by [`Switching::evaluate`]): its
+    /// coordinates, rates and accelerations read off the links, the motors' torques,
+    /// the reactions at its joints and the torques its drivers would need. `NaN` but
+    /// for t, q, q̇ only where the first model does not evaluate (exactly at its dead
+    /// point, where its driver's torque is not defined: the first coordinate does not
+    /// move the links there). `None` while the first coordinates are in use (the
+    /// column's own value holds).
     pub fn value(&self, col: Column, sim: &Simulation<T>) -> Option<T> {
         if self.alts.active() == 0 {
             return None;
         }
-        let (q, qd) = self.alts.first_state(sim);
         let nan = T::c(f64::NAN);
+        if self.evaluated {
+            if let (Some(model), ws) = (self.alts.models().first(), self.alts.last_evaluation()) {
+                return Some(Layout::read(col, model, ws, sim.time()));
+            }
+        }
+        let (q, qd) = self.alts.first_state(sim);
         Some(match col {
             Column::Time => sim.time(),
             Column::Q(j) => q.get(j).copied().unwrap_or(nan),
