@@ -252,6 +252,11 @@ impl<T: Real> Simulation<T> {
         // The groups' unknowns with their cosines and sines (`GroupData::trig`): a
         // step taken back restores both, so its re-evaluation reproduces the state.
         let saved = self.ws.warm_start();
+        // The evaluated outputs too: at a state singular within rounding (a q̈ that a
+        // position one ulp off multiplies by 1e30) re-evaluating from the warm start
+        // need not reproduce them, and a failed step must leave them as they were.
+        let outputs = (self.ws.body, self.ws.qdd, self.ws.motor);
+        let predictors = self.ws.predictors();
         let t_next = self.clamp_to_end(T::c((self.steps + 1) as f64) * self.h);
         if !t_next.finite() {
             return Err(wrap(StepError::NonFinite {
@@ -287,12 +292,19 @@ impl<T: Real> Simulation<T> {
                     self.dp5.invalidate();
                 }
                 self.ws.restore_warm_start(&saved);
+                self.ws.restore_predictors(&predictors);
                 // Re-evaluate at the last good state (it evaluated before, from the same
                 // warm start): the workspace describes the state again.
                 let m = self.model.dof();
                 let (q, qd) = self.y.as_slice().split_at(MAX_DOF);
                 let (q, qd) = (q.get(..m).unwrap_or(q), qd.get(..m).unwrap_or(qd));
                 let _ = forward(&self.model, &mut self.ws, self.t, q, qd);
+                // Where that re-evaluation does not reproduce the last good state (it
+                // failed, or its Newton iterations moved the unknowns by rounding), the
+                // state shown is still the last good one, bit for bit.
+                self.ws.restore_warm_start(&saved);
+                self.ws.restore_predictors(&predictors);
+                (self.ws.body, self.ws.qdd, self.ws.motor) = outputs;
                 Err(e)
             }
         }

@@ -75,6 +75,31 @@ pub struct WarmStart<T: Real> {
     pub trig: [[Vec2<T>; MAX_GROUP_VARS]; MAX_GROUPS],
 }
 
+/// One group's Newton predictor: `∂x/∂q`, the bias accelerations and where they were
+/// recorded (`(q, x)`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Predictor<T: Real> {
+    /// `∂x/∂q` ([`GroupData::dx_dq`]).
+    pub dx_dq: SMatrix<T, MAX_GROUP_VARS, MAX_DOF>,
+    /// `ẍ` at `q̈ = 0` ([`GroupData::xdd_bias`]).
+    pub xdd_bias: [T; MAX_GROUP_VARS],
+    /// Where they were recorded ([`GroupData::dx_dq_at`]).
+    pub at: ([T; MAX_DOF], [T; MAX_GROUP_VARS]),
+}
+
+impl<T: Real> Default for Predictor<T> {
+    fn default() -> Self {
+        Predictor {
+            dx_dq: SMatrix::zeros(),
+            xdd_bias: [T::zero(); MAX_GROUP_VARS],
+            at: ([T::zero(); MAX_DOF], [T::zero(); MAX_GROUP_VARS]),
+        }
+    }
+}
+
+/// Every group's [`Predictor`].
+pub type Predictors<T> = [Predictor<T>; MAX_GROUPS];
+
 /// Preallocated buffers of a mechanism's evaluation.
 #[derive(Debug, PartialEq)]
 pub struct Workspace<T: Real> {
@@ -317,6 +342,30 @@ impl<T: Real> Workspace<T> {
             g.x = *x;
             g.trig = *trig;
             g.trig_at = *x;
+        }
+    }
+
+    /// The groups' Newton predictors ([`GroupData::dx_dq`], `xdd_bias`, `dx_dq_at`):
+    /// with the warm start, what the next position solve starts from. A step taken back
+    /// restores them too, or its retry would start from the failed attempt's prediction.
+    pub fn predictors(&self) -> Predictors<T> {
+        core::array::from_fn(|i| {
+            self.group
+                .get(i)
+                .map_or_else(Predictor::default, |g| Predictor {
+                    dx_dq: g.dx_dq,
+                    xdd_bias: g.xdd_bias,
+                    at: g.dx_dq_at,
+                })
+        })
+    }
+
+    /// Restores predictors saved by [`Workspace::predictors`].
+    pub fn restore_predictors(&mut self, saved: &Predictors<T>) {
+        for (g, p) in self.group.iter_mut().zip(saved.iter()) {
+            g.dx_dq = p.dx_dq;
+            g.xdd_bias = p.xdd_bias;
+            g.dx_dq_at = p.at;
         }
     }
 

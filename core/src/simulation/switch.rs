@@ -178,7 +178,7 @@ impl<T: Real, const N: usize> Alternatives<T, N> {
     /// (`None` while the first model is in use, or where it does not evaluate: exactly
     /// at its dead point, where its coordinates do not place the links). Its workspace
     /// holds the first coordinates, rates and accelerations read off the links (the
-    /// accelerations those the alternative solved, [`motion`]), the motors' torques
+    /// accelerations those the alternative solved, `motion`), the motors' torques
     /// (each motor's law reads its joint's relative motion, the same in either model),
     /// and the reactions of the first model's kinetostatics at that motion: the joints
     /// are the mechanism's own, loaded as in the machine, the motors' torques at their
