@@ -26,8 +26,8 @@ use core::mem::MaybeUninit;
 use core::panic::PanicInfo;
 use structomat::ccc::{CccParams, Inputs, MotorInput, Twin, TwinSettings};
 use structomat::motor::Motor;
-use structomat::Real;
 use structomat::simulation::switch::{Alternatives, SwitchSettings};
+use structomat::Real;
 
 // On the host `main` is called by the C runtime: link libc (a no_std binary gets
 // `-nodefaultlibs`). On bare metal `build.rs` makes `main` the entry point.
