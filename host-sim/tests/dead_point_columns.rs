@@ -5,6 +5,8 @@
 //! reaction on either side of a switch, and the virtual-power balance at the driven
 //! joint (the driving torque the motion needs there is the motor's).
 
+mod common;
+
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -62,16 +64,7 @@ fn run(text: &str, dir: &Path) -> (Csv, Vec<f64>) {
         })
         .collect();
     let text = std::fs::read_to_string(&out).expect("csv");
-    let mut lines = text.lines();
-    let names = lines
-        .next()
-        .expect("header")
-        .split(',')
-        .map(String::from)
-        .collect();
-    let rows = lines
-        .map(|l| l.split(',').map(|v| v.parse().expect("number")).collect())
-        .collect();
+    let (names, rows) = common::numeric_csv(&text);
     (Csv { names, rows }, switches)
 }
 
