@@ -112,16 +112,29 @@ impl<T: Real> Twin<T> {
     /// the tolerance over the step.
     pub(super) fn check_energy(
         &self,
-        w: &Work<T>,
+        w: &mut Work<T>,
+    ) -> Result<(Audit<T>, [LinkState<T>; 9]), TwinStepError> {
+        self.check_energy_within(w, T::one())
+    }
+
+    /// [`Twin::check_energy`] at `margin` times the tolerance, at `w`'s state (the end
+    /// of the step, or an event inside it: the slot holds its positions and speeds
+    /// there). On failure `w.excess` is the jump over the tolerance.
+    pub(super) fn check_energy_within(
+        &self,
+        w: &mut Work<T>,
+        margin: T,
     ) -> Result<(Audit<T>, [LinkState<T>; 9]), TwinStepError> {
         let links = self.slots.cur().links(&self.params);
         let a = self.audit_of(&links, w);
         audit_finite(&a, w.t)?;
         let jump = a.residual() - self.audit.residual();
         let scale = T::one() + a.motor_work.abs() + a.kinetic.abs() + a.potential.abs();
-        if jump.abs() <= self.settings.energy_tol * scale {
+        let tol = self.settings.energy_tol * scale;
+        if jump.abs() <= tol * margin {
             return Ok((a, links));
         }
+        w.excess = Some(jump.abs() / tol);
         let (group, conditioning) = self.slots.cur().worst_group();
         Err(TwinStepError::Diverged {
             time: self.t.to_f64(),

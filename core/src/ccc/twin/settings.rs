@@ -19,6 +19,21 @@ pub const MAX_RETRIES: usize = 2;
 /// 1 + 4 + 16 DP5 steps' work.
 pub use crate::balance::SUBSTEPS;
 
+/// The twin's rungs: [`SUBSTEPS`] and 2 before 4, which is tried only when the failed
+/// attempt's energy jump predicts that it passes (`rung_may_pass` in the twin's step).
+/// At most 1 + 2 + 4 + 16 DP5 steps' work.
+pub(super) const RETRY_SUBSTEPS: [u32; 4] = [1, 2, 4, 16];
+
+/// The factor by which a predicted rung's jump must stay under its tolerance
+/// (the O(h⁶) estimate of `rung_may_pass` is asymptotic).
+pub(super) const RUNG_SAFETY: f64 = 2.0;
+
+/// An attempt that may be redone finer stops at an event whose state breaks the energy
+/// balance by this many times the tolerance already (the dense output's state there is
+/// where the step goes on from; the margin leaves the step's end to decide when the
+/// event's state is near the tolerance).
+pub(super) const EVENT_AUDIT_MARGIN: f64 = 2.0;
+
 /// Below this conditioning of its worst group, a [`TwinStepError::Diverged`](super::TwinStepError::Diverged) step is taken
 /// to run into a singularity of the mechanism rather than to be too coarse.
 pub const SINGULAR_CONDITIONING: f64 = 1e-2;
