@@ -114,25 +114,28 @@ impl<T: Real> Twin<T> {
         &self,
         w: &mut Work<T>,
     ) -> Result<(Audit<T>, [LinkState<T>; 9]), TwinStepError> {
-        self.check_energy_within(w, T::one())
+        let links = self.slots.cur().links(&self.params);
+        let a = self.balance_within(w, &links, T::one())?;
+        Ok((a, links))
     }
 
-    /// [`Twin::check_energy`] at `margin` times the tolerance, at `w`'s state (the end
-    /// of the step, or an event inside it: the slot holds its positions and speeds
-    /// there). On failure `w.excess` is the jump over the tolerance.
-    pub(super) fn check_energy_within(
+    /// The audit at `w`'s state (the end of the step, or an event inside it) from the
+    /// slot's physical `links` there, or the error [`Twin::check_energy`] gives if its
+    /// residual moved past `margin` times the tolerance over the step so far; on
+    /// failure `w.excess` is the jump over the tolerance.
+    pub(super) fn balance_within(
         &self,
         w: &mut Work<T>,
+        links: &[LinkState<T>; 9],
         margin: T,
-    ) -> Result<(Audit<T>, [LinkState<T>; 9]), TwinStepError> {
-        let links = self.slots.cur().links(&self.params);
-        let a = self.audit_of(&links, w);
+    ) -> Result<Audit<T>, TwinStepError> {
+        let a = self.audit_of(links, w);
         audit_finite(&a, w.t)?;
         let jump = a.residual() - self.audit.residual();
         let scale = T::one() + a.motor_work.abs() + a.kinetic.abs() + a.potential.abs();
         let tol = self.settings.energy_tol * scale;
         if jump.abs() <= tol * margin {
-            return Ok((a, links));
+            return Ok(a);
         }
         w.excess = Some(jump.abs() / tol);
         let (group, conditioning) = self.slots.cur().worst_group();

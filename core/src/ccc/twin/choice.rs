@@ -51,6 +51,11 @@ impl<T: Real> Twin<T> {
         let from = self.slots.cur().mode;
         let pose = self.slot_links_unwrapped();
         let links = self.slots.cur().links(&self.params);
+        if w.audit_at_events {
+            // A finer rung would redo the step, this event and its choice: stop here
+            // if the state at the event already breaks the energy balance.
+            self.balance_within(w, &links, T::c(EVENT_AUDIT_MARGIN))?;
+        }
         let shaft = shaft_speed(from, &links);
         let tol_w = speed_tol::<T>() * speed_scale(&links);
         let cands = candidate_modes(from, kind, &links, shaft, tol_w);

@@ -57,7 +57,7 @@ use guards::Guards;
 use inputs::{check_inputs, same_inputs};
 use nalgebra::SVector;
 use slot::{unwrap_near, Equations, Slot, QD, STATE};
-use settings::{EVENT_AUDIT_MARGIN, RETRY_SUBSTEPS, RUNG_SAFETY};
+use settings::{RETRY_SUBSTEPS, RUNG_SAFETY};
 use slots::Slots;
 
 /// The twin of one converter: its parameters, settings and state, and the working
@@ -220,7 +220,7 @@ struct Work<T: Real> {
     /// the last committed ones).
     segment_levers: [T; 2],
     /// Check the energy balance at each event, before its mode choice
-    /// ([`Twin::check_energy`]), and fail the attempt there if it already breaks by
+    /// ([`Twin::balance_within`]), and fail the attempt there if it already breaks by
     /// [`EVENT_AUDIT_MARGIN`] times the tolerance.
     audit_at_events: bool,
     /// The energy check that failed the attempt: its residual's jump over its
@@ -496,9 +496,6 @@ impl<T: Real> Twin<T> {
                 .cur_mut()
                 .eval_speeds(w.t, &w.y)
                 .map_err(|e| self.physical_error(e))?;
-        }
-        if w.audit_at_events {
-            self.check_energy_within(w, T::c(EVENT_AUDIT_MARGIN))?;
         }
         self.choose(w, kind, inputs)?;
         Ok(true)
