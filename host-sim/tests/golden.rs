@@ -87,7 +87,7 @@ const PINS: &[Pin<'static>] = &[
     Pin {
         args: "ccc-s1",
         exit: 0,
-        csv: "36d7fe74cdc7aaa35c208d49d368ba0e91d5f9430e1113b04c9e548af34b4c2a",
+        csv: "b575b5384afbab785fbe4d3c9c5790b26fe5e5974edcd4a570bb7895e56e1403",
         logs: Some((
             "2a18d19a58b935cc5a81a088e9c456f81ad855f74a9f76a5d7ec92b8b8ba339b",
             "9a52b761f69ab666f48cadb42b788f2fabceddd39201f1066997acf316fd6238",
