@@ -56,8 +56,8 @@ use evaluate::{Stage, TorqueSource, Torques};
 use guards::Guards;
 use inputs::{check_inputs, same_inputs};
 use nalgebra::SVector;
-use slot::{unwrap_near, Equations, Slot, QD, STATE};
 use settings::{RETRY_SUBSTEPS, RUNG_SAFETY};
+use slot::{unwrap_near, Equations, Slot, QD, STATE};
 use slots::Slots;
 
 /// The twin of one converter: its parameters, settings and state, and the working
@@ -65,8 +65,9 @@ use slots::Slots;
 ///
 /// # Contract
 ///
-/// **Bounded work per step.** A step is at most [`SUBSTEPS`]`.len()` attempts (1, 4 and
-/// 16 DP5 steps between events: 21 steps' work in all), each with at most
+/// **Bounded work per step.** A step is at most 4 attempts (1, 2, 4 and 16 DP5 steps
+/// between events, 2 only when the energy check predicts it passes: 23 steps' work in
+/// all; [`SUBSTEPS`] are the core's rungs), each with at most
 /// [`MAX_EVENTS_PER_STEP`] events, each located in at most [`MAX_LOCATE_ITER`]
 /// evaluations and settled by at most 7 candidate modes of at most 3 coordinate choices
 /// each, and at most [`MAX_RETRIES`] coordinate switches after a failed sub-step. Every

@@ -16,7 +16,8 @@ pub const MAX_RETRIES: usize = 2;
 
 /// Sub-steps tried in turn when a step breaks the energy balance (see
 /// [`TwinSettings::energy_tol`]): the core's division of a fixed step, at most
-/// 1 + 4 + 16 DP5 steps' work.
+/// 1 + 4 + 16 DP5 steps' work. The twin tries 2 before 4 when the failed attempt's
+/// energy jump predicts that 2 pass (at most 1 + 2 + 4 + 16).
 pub use crate::balance::SUBSTEPS;
 
 /// The twin's rungs: [`SUBSTEPS`] and 2 before 4, which is tried only when the failed
