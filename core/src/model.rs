@@ -579,8 +579,8 @@ impl<T: Real, C: Capacity<T>, M: DerefMut<Target = Model<T, C>>> ModelBuilder<T,
     }
 
     /// [`ModelBuilder::group`] for the constructors that write their group in place:
-    /// the same group and errors, but the group is written into the sequence, not built
-    /// apart and moved there.
+    /// the same group and errors (but a full sequence's, which comes first), the group
+    /// written into the sequence, not built apart and moved there.
     pub(crate) fn group_in_place(&mut self, spec: &impl WriteGroup<T>) -> Result<u8, ModelError> {
         let Model {
             ground,
@@ -590,8 +590,9 @@ impl<T: Real, C: Capacity<T>, M: DerefMut<Target = Model<T, C>>> ModelBuilder<T,
         } = &mut *self.m;
         let points = Points { ground, links };
         if groups.is_full() {
-            // The constructor's own errors come first, as in `group`.
-            return Err(full_group_error(spec, &points));
+            // Unlike `group`, before the constructor's own errors: its group would have
+            // to be written apart (2 KB in f64 on the stack, and code of its own).
+            return Err(ModelError::Capacity("groups"));
         }
         let _ = groups.push(Group::empty());
         let written = match groups.last_mut() {
@@ -649,19 +650,6 @@ impl<T: Real, C: Capacity<T>, M: DerefMut<Target = Model<T, C>>> ModelBuilder<T,
             .push(load)
             .map_err(|_| ModelError::Capacity("loads"))?;
         Ok(self)
-    }
-}
-
-/// The error of [`ModelBuilder::group_in_place`] into a full sequence: the group
-/// constructor's own, else the capacity's (as [`ModelBuilder::group`] gives). Apart and
-/// cold: its group (2 KB in f64) is on the stack only on this path.
-#[cold]
-#[inline(never)]
-fn full_group_error<T: Real>(spec: &impl WriteGroup<T>, points: &Points<'_, T>) -> ModelError {
-    let mut g = Group::empty();
-    match spec.write(points, &mut g) {
-        Err(e) => e,
-        Ok(()) => ModelError::Capacity("groups"),
     }
 }
 
