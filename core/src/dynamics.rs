@@ -6,6 +6,7 @@
 //! `VᵀMV` is symmetric positive definite away from singular configurations; it is
 //! factored by Cholesky (identity padding past the degrees of freedom).
 
+use crate::capacity::Capacity;
 use crate::config::{MAX_DOF, POSE_ROWS};
 use crate::error::StepError;
 use crate::linalg::{cholesky, cholesky_solve};
@@ -27,8 +28,8 @@ pub struct Energy<T> {
 
 /// Adds a force `f` (N, world) applied at world point `at` and a moment (N·m) to the
 /// loads of link `body` (reduced to its COG at the poses `bodies`).
-pub(crate) fn add_load<T: Real>(
-    model: &Model<T>,
+pub(crate) fn add_load<T: Real, C: Capacity<T>>(
+    model: &Model<T, C>,
     bodies: &[BodyState<T>],
     loads: &mut SVector<T, POSE_ROWS>,
     body: u8,
@@ -51,9 +52,9 @@ pub(crate) fn add_load<T: Real>(
 /// Applied loads `F`: gravity at every COG, the motors (through their motor element's
 /// driver joint, reaction on the body it is mounted on) and the constant loads. Also
 /// records each motor's torque in `ws.motor`.
-pub fn applied_forces<T: Real>(
-    model: &Model<T>,
-    ws: &mut Workspace<T>,
+pub fn applied_forces<T: Real, C: Capacity<T>>(
+    model: &Model<T, C>,
+    ws: &mut Workspace<T, C>,
     t: T,
 ) -> Result<(), StepError> {
     for (k, d) in model.drives().iter().enumerate() {
@@ -106,7 +107,11 @@ pub fn applied_forces<T: Real>(
 /// joint ([`Drive`]) the joint's relative angle `θ_i - θ_j` (rad) and speed, or the
 /// offset of the slider's joint point along the guide of `j` (m, from the guide's
 /// joint point) and its rate.
-pub fn drive_motion<T: Real>(model: &Model<T>, ws: &Workspace<T>, d: &Drive<T>) -> (T, T) {
+pub fn drive_motion<T: Real, C: Capacity<T>>(
+    model: &Model<T, C>,
+    ws: &Workspace<T, C>,
+    d: &Drive<T>,
+) -> (T, T) {
     let Some(j) = d.joint else {
         let c = d.coord as usize;
         return (
@@ -144,8 +149,8 @@ pub fn drive_motion<T: Real>(model: &Model<T>, ws: &Workspace<T>, d: &Drive<T>) 
 /// Adds the torque (revolute) or force along the guide (prismatic) `tau` of a drive
 /// across joint `j` of group `grp` to the loads `f`: on the joint's body `i`, its
 /// reaction on `j`, at `i`'s joint point.
-fn add_across<T: Real>(
-    model: &Model<T>,
+fn add_across<T: Real, C: Capacity<T>>(
+    model: &Model<T, C>,
     body: &[BodyState<T>],
     f: &mut SVector<T, POSE_ROWS>,
     grp: &crate::structomat::Group<T>,
@@ -169,8 +174,8 @@ fn add_across<T: Real>(
 /// Sets `f` to the loads other than the motors: gravity at every COG, then the model's
 /// constant loads and the caller-set moments ([`add_external_loads`]); zeros past the
 /// live rows. Shared by the equations of motion and the kinetostatics.
-pub(crate) fn loads_without_motors<T: Real>(
-    model: &Model<T>,
+pub(crate) fn loads_without_motors<T: Real, C: Capacity<T>>(
+    model: &Model<T, C>,
     bodies: &[BodyState<T>],
     applied_moment: &[T],
     f: &mut SVector<T, POSE_ROWS>,
@@ -193,8 +198,8 @@ pub(crate) fn loads_without_motors<T: Real>(
 /// Adds the model's constant loads and the caller-set moments (`applied_moment`, per
 /// body) to `f`, at the poses `bodies` (shared by the equations of motion and the
 /// kinetostatics).
-pub(crate) fn add_external_loads<T: Real>(
-    model: &Model<T>,
+pub(crate) fn add_external_loads<T: Real, C: Capacity<T>>(
+    model: &Model<T, C>,
     bodies: &[BodyState<T>],
     applied_moment: &[T],
     f: &mut SVector<T, POSE_ROWS>,
@@ -215,7 +220,11 @@ pub(crate) fn add_external_loads<T: Real>(
 /// The actual pose-space accelerations `a_G = a_b + V q̈` of link `body` (its COG's
 /// acceleration and its angular acceleration) at the workspace's `q̈`, over the
 /// model's `dof` coordinates (`q̈` is zero past them: the same sums, bit for bit).
-pub(crate) fn link_acceleration<T: Real>(ws: &Workspace<T>, dof: usize, body: u8) -> [T; 3] {
+pub(crate) fn link_acceleration<T: Real, C: Capacity<T>>(
+    ws: &Workspace<T, C>,
+    dof: usize,
+    body: u8,
+) -> [T; 3] {
     let r = 3 * (body as usize).saturating_sub(1);
     let mut vq = [T::zero(); 3];
     for (j, q) in ws.qdd.iter().enumerate().take(dof) {
@@ -237,9 +246,9 @@ pub(crate) fn link_acceleration<T: Real>(ws: &Workspace<T>, dof: usize, body: u8
 
 /// Forward dynamics at `(t, q, q̇)`: kinematics, `V`, `a_b`, `F`, `VᵀMV`, `q̈`. Leaves
 /// the workspace consistent: body and group accelerations are the actual ones.
-pub fn forward<T: Real>(
-    model: &Model<T>,
-    ws: &mut Workspace<T>,
+pub fn forward<T: Real, C: Capacity<T>>(
+    model: &Model<T, C>,
+    ws: &mut Workspace<T, C>,
     t: T,
     q: &[T],
     qd: &[T],
@@ -256,9 +265,9 @@ pub fn forward<T: Real>(
 /// `VᵀMV` and `Vᵀ(F - M a_b)` are summed over the live rows and coordinates only, the
 /// mass matrix's lower triangle then mirrored; 1 and 2 degrees of freedom are solved in
 /// closed form, 3 by Cholesky.
-pub fn generalized_accelerations<T: Real>(
-    model: &Model<T>,
-    ws: &mut Workspace<T>,
+pub fn generalized_accelerations<T: Real, C: Capacity<T>>(
+    model: &Model<T, C>,
+    ws: &mut Workspace<T, C>,
     t: T,
     q: &[T],
     qd: &[T],
@@ -270,9 +279,9 @@ pub fn generalized_accelerations<T: Real>(
 /// `VᵀMV` and `Vᵀ(F - M a_b)` for `M` coordinates (thesis eq. 4.49) into the top-left
 /// blocks of `mq` and `gf`: one pass over the live rows (3 per link), each adding its
 /// terms `m_r V_rj V_rk` (lower triangle, then mirrored) and `V_rj (F_r - m_r a_b,r)`.
-fn generalized_terms<T: Real, const M: usize>(
-    model: &Model<T>,
-    ws: &Workspace<T>,
+fn generalized_terms<T: Real, const M: usize, C: Capacity<T>>(
+    model: &Model<T, C>,
+    ws: &Workspace<T, C>,
     mq: &mut SMatrix<T, MAX_DOF, MAX_DOF>,
     gf: &mut SVector<T, MAX_DOF>,
 ) {
@@ -321,9 +330,9 @@ fn generalized_terms<T: Real, const M: usize>(
 /// `Vᵀ(F - M a_b)` and `q̈`, at the kinematics the workspace already holds (from
 /// [`evaluate`]). Lets a caller set loads that depend on the evaluated motion (a motor
 /// law on a link that is not a coordinate, into `ws.applied_moment`) in between.
-pub fn solve_accelerations<T: Real>(
-    model: &Model<T>,
-    ws: &mut Workspace<T>,
+pub fn solve_accelerations<T: Real, C: Capacity<T>>(
+    model: &Model<T, C>,
+    ws: &mut Workspace<T, C>,
     t: T,
 ) -> Result<(), StepError> {
     let time = t.to_f64();
@@ -333,9 +342,9 @@ pub fn solve_accelerations<T: Real>(
     let mut gf = SVector::<T, MAX_DOF>::zeros();
     match m {
         0 => {}
-        1 => generalized_terms::<T, 1>(model, ws, &mut mq, &mut gf),
-        2 => generalized_terms::<T, 2>(model, ws, &mut mq, &mut gf),
-        _ => generalized_terms::<T, MAX_DOF>(model, ws, &mut mq, &mut gf),
+        1 => generalized_terms::<T, 1, C>(model, ws, &mut mq, &mut gf),
+        2 => generalized_terms::<T, 2, C>(model, ws, &mut mq, &mut gf),
+        _ => generalized_terms::<T, MAX_DOF, C>(model, ws, &mut mq, &mut gf),
     }
     ws.mass_q = mq;
     ws.gen_force = gf;
@@ -391,7 +400,10 @@ pub fn solve_accelerations<T: Real>(
 
 /// With `q̈` known: actual COG and origin accelerations of every body
 /// (`a_G = a_b + V q̈`) and every group's `ẍ = ẍ_b + C q̈`.
-pub fn finish_accelerations<T: Real>(model: &Model<T>, ws: &mut Workspace<T>) {
+pub fn finish_accelerations<T: Real, C: Capacity<T>>(
+    model: &Model<T, C>,
+    ws: &mut Workspace<T, C>,
+) {
     for (i, l) in model.links().iter().enumerate() {
         let [ax, ay, al] = link_acceleration(ws, model.dof(), i as u8 + 1);
         let Some(b) = ws.body.get_mut(i + 1) else {
@@ -411,7 +423,7 @@ pub fn finish_accelerations<T: Real>(model: &Model<T>, ws: &mut Workspace<T>) {
 }
 
 /// Kinetic and potential energy at the workspace's last evaluation.
-pub fn energy<T: Real>(model: &Model<T>, ws: &Workspace<T>) -> Energy<T> {
+pub fn energy<T: Real, C: Capacity<T>>(model: &Model<T, C>, ws: &Workspace<T, C>) -> Energy<T> {
     let g = model.gravity();
     let mut e = Energy::default();
     let half = T::c(0.5);

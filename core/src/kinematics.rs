@@ -1,6 +1,7 @@
 //! Kinematic passes over the motion-transmission sequence (thesis 3.2): each group is
 //! solved in order from the ground, its output poles feeding the next groups.
 
+use crate::capacity::Capacity;
 use crate::config::{MAX_DOF, MAX_GROUP_VARS};
 use crate::error::{GroupFault, GroupId, StepError};
 use crate::model::Model;
@@ -42,10 +43,10 @@ fn fail<T: Real>(g: &Group<T>, index: usize, time: f64, fault: GroupFault) -> St
 /// Solves one group's position problem at the current branch or warm start; `qd` are
 /// the rates of the evaluation that recorded the group's transmission functions (the
 /// workspace's, for Newton's predictor).
-fn solve_group<T: Real>(
+fn solve_group<T: Real, C: Capacity<T>>(
     g: &Group<T>,
     gd: &mut GroupData<T>,
-    model: &Model<T>,
+    model: &Model<T, C>,
     bodies: &mut [BodyState<T>],
     q: &[T],
     qd: &[T],
@@ -67,9 +68,9 @@ fn solve_group<T: Real>(
 /// error messages. On error the workspace's group unknowns may have moved: callers that
 /// must keep a last good state save and restore them ([`Simulation`](crate::Simulation)
 /// does).
-pub fn position<T: Real>(
-    model: &Model<T>,
-    ws: &mut Workspace<T>,
+pub fn position<T: Real, C: Capacity<T>>(
+    model: &Model<T, C>,
+    ws: &mut Workspace<T, C>,
     q: &[T],
     time: f64,
 ) -> Result<(), StepError> {
@@ -78,22 +79,22 @@ pub fn position<T: Real>(
 
 /// A group's position solver: closed form where there is one, or Newton-Raphson.
 /// Its last argument is `q̇` of the last evaluation ([`newton`]'s predictor).
-type Solver<T> = fn(
+type Solver<T, C> = fn(
     &Group<T>,
     &mut GroupData<T>,
-    &Model<T>,
+    &Model<T, C>,
     &mut [BodyState<T>],
     &[T],
     &[T],
 ) -> Result<T, GroupFault>;
 
 /// The position pass with a given group solver.
-fn position_by<T: Real>(
-    model: &Model<T>,
-    ws: &mut Workspace<T>,
+fn position_by<T: Real, C: Capacity<T>>(
+    model: &Model<T, C>,
+    ws: &mut Workspace<T, C>,
     q: &[T],
     time: f64,
-    solve: Solver<T>,
+    solve: Solver<T, C>,
 ) -> Result<(), StepError> {
     if q.iter().any(|v| !v.finite()) {
         return Err(StepError::NonFinite {
@@ -119,7 +120,7 @@ fn position_by<T: Real>(
 }
 
 /// Velocity pass at the rates `qd` (after a position pass).
-pub fn velocity<T: Real>(model: &Model<T>, ws: &mut Workspace<T>, qd: &[T]) {
+pub fn velocity<T: Real, C: Capacity<T>>(model: &Model<T, C>, ws: &mut Workspace<T, C>, qd: &[T]) {
     let Workspace { body, group, .. } = ws;
     for (g, gd) in model.groups().iter().zip(group.iter_mut()) {
         velocity_pass(g, gd, model, body, qd);
@@ -128,7 +129,12 @@ pub fn velocity<T: Real>(model: &Model<T>, ws: &mut Workspace<T>, qd: &[T]) {
 
 /// Acceleration pass at the rates `qd` and accelerations `qdd` (after the velocity pass
 /// with the same `qd`).
-pub fn acceleration<T: Real>(model: &Model<T>, ws: &mut Workspace<T>, qd: &[T], qdd: &[T]) {
+pub fn acceleration<T: Real, C: Capacity<T>>(
+    model: &Model<T, C>,
+    ws: &mut Workspace<T, C>,
+    qd: &[T],
+    qdd: &[T],
+) {
     let Workspace { body, group, .. } = ws;
     for (g, gd) in model.groups().iter().zip(group.iter_mut()) {
         acceleration_pass(g, gd, model, body, qd, qdd);
@@ -174,9 +180,9 @@ impl<T: Real> RemEuclid for T {
 /// "conditions initiales"): each closed-form dyad takes the branch whose solution is
 /// nearest its guesses; Newton groups start from them and record the sign of det W as
 /// their branch.
-pub fn assemble<T: Real>(
-    model: &Model<T>,
-    ws: &mut Workspace<T>,
+pub fn assemble<T: Real, C: Capacity<T>>(
+    model: &Model<T, C>,
+    ws: &mut Workspace<T, C>,
     q: &[T],
 ) -> Result<(), StepError> {
     assemble_by(
@@ -194,9 +200,9 @@ pub fn assemble<T: Real>(
 /// that places its links nearest their poses there; Newton groups start from the link
 /// angles read off them (slides from the guesses: the groups with slides Newton solves
 /// are linear, one step from anywhere) and record the sign of det W as their branch.
-pub(crate) fn assemble_near<T: Real>(
-    model: &Model<T>,
-    ws: &mut Workspace<T>,
+pub(crate) fn assemble_near<T: Real, C: Capacity<T>>(
+    model: &Model<T, C>,
+    ws: &mut Workspace<T, C>,
     q: &[T],
     near: &[BodyState<T>],
 ) -> Result<(), StepError> {
@@ -234,9 +240,9 @@ pub(crate) fn assemble_near<T: Real>(
 /// [`assemble`] with the Newton groups' starting unknowns `start(group, bodies)` and
 /// the measure `distance(group, solved data, bodies)` by which a closed-form dyad picks
 /// its branch; `what` names `q` if it is not finite.
-fn assemble_by<T: Real>(
-    model: &Model<T>,
-    ws: &mut Workspace<T>,
+fn assemble_by<T: Real, C: Capacity<T>>(
+    model: &Model<T, C>,
+    ws: &mut Workspace<T, C>,
     q: &[T],
     what: &'static str,
     start: impl Fn(&Group<T>, &[BodyState<T>]) -> [T; MAX_GROUP_VARS],
@@ -307,9 +313,9 @@ pub(crate) fn unit_rate<T: Real>(j: usize) -> [T; MAX_DOF] {
 /// Position pass that solves *every* group by Newton-Raphson from its current unknowns
 /// (the thesis's method), instead of the dyads' closed forms: the second method the
 /// closed forms are tested against.
-pub fn position_newton<T: Real>(
-    model: &Model<T>,
-    ws: &mut Workspace<T>,
+pub fn position_newton<T: Real, C: Capacity<T>>(
+    model: &Model<T, C>,
+    ws: &mut Workspace<T, C>,
     q: &[T],
     time: f64,
 ) -> Result<(), StepError> {

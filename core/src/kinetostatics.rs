@@ -21,6 +21,7 @@
 //!   joint only are taken out first (leaving 3 and 4), then back-substitution;
 //! - any other group as one dense system.
 
+use crate::capacity::Capacity;
 use crate::config::{MAX_BODIES, MAX_GROUP_JOINTS, MAX_GROUP_LINKS, POSE_ROWS};
 use crate::dynamics::{add_load, link_acceleration, loads_without_motors};
 use crate::error::{GroupFault, StepError};
@@ -33,7 +34,10 @@ use nalgebra::{SMatrix, SVector, Vector3};
 
 /// Loads on each body without the motors: gravity, constant and caller-set loads, and
 /// inertia (`F - M a_G`, live rows only).
-fn free_body_loads<T: Real>(model: &Model<T>, ws: &Workspace<T>) -> SVector<T, POSE_ROWS> {
+fn free_body_loads<T: Real, C: Capacity<T>>(
+    model: &Model<T, C>,
+    ws: &Workspace<T, C>,
+) -> SVector<T, POSE_ROWS> {
     let mut f = SVector::<T, POSE_ROWS>::zeros();
     loads_without_motors(model, &ws.body, &ws.applied_moment, &mut f);
     for (i, (l, rows)) in model
@@ -66,7 +70,7 @@ struct Unknowns<T: Real> {
 impl<T: Real> Unknowns<T> {
     /// The unknowns of joint `jt`: a revolute's force `(F_x, F_y)`; a prismatic's force
     /// normal to the guide and moment; a driver's torque, or force along its guide.
-    fn of(ws: &Workspace<T>, jt: &Joint<T>) -> Self {
+    fn of<C: Capacity<T>>(ws: &Workspace<T, C>, jt: &Joint<T>) -> Self {
         let bi = ws.body.get(jt.i as usize).copied().unwrap_or_default();
         let bj = ws.body.get(jt.j as usize).copied().unwrap_or_default();
         let at = bi.o + rotate_cs(bi.c, bi.s, &jt.pi);
@@ -143,10 +147,10 @@ impl<T: Real> Equilibrium<T> {
     }
 
     /// Sets up group `g`'s equilibrium at the workspace's pose under `loads`.
-    fn set(
+    fn set<C: Capacity<T>>(
         &mut self,
-        model: &Model<T>,
-        ws: &Workspace<T>,
+        model: &Model<T, C>,
+        ws: &Workspace<T, C>,
         g: &Group<T>,
         loads: &SVector<T, POSE_ROWS>,
     ) {
@@ -866,9 +870,9 @@ fn solve2<T: Real>(a: [[T; 2]; 2], r: [T; 2]) -> [T; 2] {
 /// workspace's last forward-dynamics evaluation, into `ws.reactions` (per group, in the
 /// order of its joints; a motor element's driver joint holds its driving torque in
 /// `moment`, or its driving force in `force`).
-pub fn reactions<T: Real>(
-    model: &Model<T>,
-    ws: &mut Workspace<T>,
+pub fn reactions<T: Real, C: Capacity<T>>(
+    model: &Model<T, C>,
+    ws: &mut Workspace<T, C>,
     time: f64,
 ) -> Result<(), StepError> {
     let mut loads = free_body_loads(model, ws);
@@ -908,7 +912,11 @@ const _: () = assert!(
 
 /// The driving torque (N·m) or force (N) that the motion requires at motor element
 /// `group`, from the last [`reactions`] call; `None` if `group` is not a motor element.
-pub fn driving_torque<T: Real>(model: &Model<T>, ws: &Workspace<T>, group: usize) -> Option<T> {
+pub fn driving_torque<T: Real, C: Capacity<T>>(
+    model: &Model<T, C>,
+    ws: &Workspace<T, C>,
+    group: usize,
+) -> Option<T> {
     let g = model.groups().get(group)?;
     let (k, jt) = g.joints.iter().enumerate().find(|(_, j)| {
         matches!(

@@ -61,6 +61,7 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 pub mod balance;
+pub mod capacity;
 pub mod ccc;
 pub mod config;
 pub mod dynamics;

@@ -6,9 +6,8 @@
 //! which checks everything a step relies on, so that the step path never meets a bad
 //! reference.
 
-use crate::config::{
-    MAX_DOF, MAX_DRIVES, MAX_GROUND_POINTS, MAX_GROUPS, MAX_LINKS, MAX_LINK_POINTS, MAX_LOADS,
-};
+use crate::capacity::{Capacity, Generic, List};
+use crate::config::{MAX_DOF, MAX_DRIVES, MAX_GROUPS, MAX_LINKS, MAX_LINK_POINTS};
 use crate::error::ModelError;
 use crate::motor::Motor;
 use crate::scalar::{Real, Vec2};
@@ -137,20 +136,21 @@ pub struct Load<T: Real> {
 }
 
 /// A validated mechanism description. Built by [`ModelBuilder`]; read-only afterwards.
+/// Its lists are sized by the capacity `C` ([`Generic`]: the `config` limits).
 #[derive(Debug)]
-pub struct Model<T: Real> {
-    ground: heapless::Vec<Vec2<T>, MAX_GROUND_POINTS>,
-    links: heapless::Vec<Link<T>, MAX_LINKS>,
-    groups: heapless::Vec<Group<T>, MAX_GROUPS>,
+pub struct Model<T: Real, C: Capacity<T> = Generic> {
+    ground: C::GroundPoints,
+    links: C::Links,
+    groups: C::Groups,
     drives: heapless::Vec<Drive<T>, MAX_DRIVES>,
-    loads: heapless::Vec<Load<T>, MAX_LOADS>,
+    loads: C::Loads,
     gravity: Vec2<T>,
     dof: u8,
     singular_tol: T,
     newton_tol: T,
 }
 
-impl<T: Real> Clone for Model<T> {
+impl<T: Real, C: Capacity<T>> Clone for Model<T, C> {
     fn clone(&self) -> Self {
         Model {
             ground: self.ground.clone(),
@@ -179,7 +179,24 @@ impl<T: Real> Clone for Model<T> {
     }
 }
 
-impl<T: Real> Model<T> {
+impl<T: Real, C: Capacity<T>> Model<T, C> {
+    /// The empty model [`ModelBuilder::new`] starts from (no links, gravity `(0, -9.81)`
+    /// m/s²), by value. Not a valid model to evaluate until rebuilt
+    /// ([`ModelBuilder::in_place`]).
+    pub(crate) fn empty() -> Self {
+        Model {
+            ground: List::new(),
+            links: List::new(),
+            groups: List::new(),
+            drives: heapless::Vec::new(),
+            loads: List::new(),
+            gravity: default_gravity(),
+            dof: 0,
+            singular_tol: default_singular_tol(),
+            newton_tol: T::zero(),
+        }
+    }
+
     /// Initialises `place` in place as an empty model, the one [`ModelBuilder::new`]
     /// starts from (no links, gravity `(0, -9.81)` m/s²): nothing on the stack but the
     /// small fields (a model is 16 KB in f64). Not a valid model to evaluate until
@@ -192,11 +209,11 @@ impl<T: Real> Model<T> {
         // before `assume_init_mut`. A heapless vector's `new` leaves its buffer
         // uninitialised: only its length is stored.
         unsafe {
-            addr_of_mut!((*p).ground).write(heapless::Vec::new());
-            addr_of_mut!((*p).links).write(heapless::Vec::new());
-            addr_of_mut!((*p).groups).write(heapless::Vec::new());
+            addr_of_mut!((*p).ground).write(List::new());
+            addr_of_mut!((*p).links).write(List::new());
+            addr_of_mut!((*p).groups).write(List::new());
             addr_of_mut!((*p).drives).write(heapless::Vec::new());
-            addr_of_mut!((*p).loads).write(heapless::Vec::new());
+            addr_of_mut!((*p).loads).write(List::new());
             addr_of_mut!((*p).gravity).write(default_gravity());
             addr_of_mut!((*p).dof).write(0);
             addr_of_mut!((*p).singular_tol).write(default_singular_tol());
@@ -209,7 +226,7 @@ impl<T: Real> Model<T> {
 /// The fields [`Model::init_empty`] writes: a field added to [`Model`] and not there
 /// fails to compile here.
 #[allow(dead_code)]
-fn fields_of<T: Real>(m: &Model<T>) {
+fn fields_of<T: Real, C: Capacity<T>>(m: &Model<T, C>) {
     let Model {
         ground: _,
         links: _,
@@ -224,14 +241,14 @@ fn fields_of<T: Real>(m: &Model<T>) {
 }
 
 /// `dst` becomes a copy of `src`, element by element (the same capacity: every push fits).
-fn copy_vec<E: Clone, const N: usize>(dst: &mut heapless::Vec<E, N>, src: &heapless::Vec<E, N>) {
+fn copy_vec<E: Clone, L: List<E>>(dst: &mut L, src: &L) {
     dst.clear();
     for e in src.iter() {
         let _ = dst.push(e.clone());
     }
 }
 
-impl<T: Real> Model<T> {
+impl<T: Real, C: Capacity<T>> Model<T, C> {
     /// Number of moving links.
     pub fn n_links(&self) -> usize {
         self.links.len()
@@ -317,7 +334,7 @@ impl<T: Real> Model<T> {
 
     /// The structomatic formula of the sequence, e.g.
     /// `Z(0) + R(1) + R(2) + RRR(3,4)` (thesis eq. 3.1-3.3).
-    pub fn formula(&self) -> Formula<'_, T> {
+    pub fn formula(&self) -> Formula<'_, T, C> {
         Formula(self)
     }
 }
@@ -365,9 +382,9 @@ impl<T: Real> Points<'_, T> {
 }
 
 /// Displays a model's structomatic formula ([`Model::formula`]).
-pub struct Formula<'a, T: Real>(&'a Model<T>);
+pub struct Formula<'a, T: Real, C: Capacity<T> = Generic>(&'a Model<T, C>);
 
-impl<T: Real> fmt::Display for Formula<'_, T> {
+impl<T: Real, C: Capacity<T>> fmt::Display for Formula<'_, T, C> {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.write_str("Z(0)")?;
         for (i, g) in self.0.groups.iter().enumerate() {
@@ -459,17 +476,7 @@ impl<T: Real> ModelBuilder<T> {
     /// An empty mechanism with gravity `(0, -9.81)` m/s² (SPEC: g along -y).
     pub fn new() -> Self {
         ModelBuilder {
-            m: OwnedModel(Model {
-                ground: heapless::Vec::new(),
-                links: heapless::Vec::new(),
-                groups: heapless::Vec::new(),
-                drives: heapless::Vec::new(),
-                loads: heapless::Vec::new(),
-                gravity: default_gravity(),
-                dof: 0,
-                singular_tol: default_singular_tol(),
-                newton_tol: T::zero(),
-            }),
+            m: OwnedModel(Model::empty()),
             scalar: PhantomData,
         }
     }
@@ -481,11 +488,11 @@ impl<T: Real> ModelBuilder<T> {
     }
 }
 
-impl<'a, T: Real> ModelBuilder<T, &'a mut Model<T>> {
+impl<'a, T: Real, C: Capacity<T>> ModelBuilder<T, &'a mut Model<T, C>> {
     /// Rebuilds `model` in place: empties it to the state of [`ModelBuilder::new`]'s
     /// model, then declares into it. Until [`ModelBuilder::finish`] succeeds, `model`
     /// is not a valid model.
-    pub fn in_place(model: &'a mut Model<T>) -> Self {
+    pub fn in_place(model: &'a mut Model<T, C>) -> Self {
         model.ground.clear();
         model.links.clear();
         model.groups.clear();
@@ -518,8 +525,23 @@ impl<'a, T: Real> ModelBuilder<T, &'a mut Model<T>> {
 }
 
 impl<T: Real, M: DerefMut<Target = Model<T>>> ModelBuilder<T, M> {
+    /// Appends a group to the motion-transmission sequence. [`ModelBuilder::build`]
+    /// checks that every value the group holds is finite: its angle offsets and guesses
+    /// as given, and what its constructor derives from the links' points (lengths,
+    /// directions: a point at 1e200 m is finite but its squared length is not).
+    pub fn group(&mut self, spec: &impl GroupSpec<T>) -> Result<u8, ModelError> {
+        let g = spec.build(&self.m)?;
+        self.m
+            .groups
+            .push(g)
+            .map_err(|_| ModelError::Capacity("groups"))?;
+        Ok((self.m.groups.len() - 1) as u8)
+    }
+}
+
+impl<T: Real, C: Capacity<T>, M: DerefMut<Target = Model<T, C>>> ModelBuilder<T, M> {
     /// The model as declared so far (group constructors resolve points in it).
-    pub fn model(&self) -> &Model<T> {
+    pub fn model(&self) -> &Model<T, C> {
         &self.m
     }
 
@@ -556,22 +578,9 @@ impl<T: Real, M: DerefMut<Target = Model<T>>> ModelBuilder<T, M> {
         Ok(self.m.links.len() as u8)
     }
 
-    /// Appends a group to the motion-transmission sequence. [`ModelBuilder::build`]
-    /// checks that every value the group holds is finite: its angle offsets and guesses
-    /// as given, and what its constructor derives from the links' points (lengths,
-    /// directions: a point at 1e200 m is finite but its squared length is not).
-    pub fn group(&mut self, spec: &impl GroupSpec<T>) -> Result<u8, ModelError> {
-        let g = spec.build(&self.m)?;
-        self.m
-            .groups
-            .push(g)
-            .map_err(|_| ModelError::Capacity("groups"))?;
-        Ok((self.m.groups.len() - 1) as u8)
-    }
-
     /// [`ModelBuilder::group`] for the constructors that write their group in place:
-    /// the same group and errors, but the group is written into the sequence, not built
-    /// apart and moved there.
+    /// the same group and errors (but a full sequence's, which comes first), the group
+    /// written into the sequence, not built apart and moved there.
     pub(crate) fn group_in_place(&mut self, spec: &impl WriteGroup<T>) -> Result<u8, ModelError> {
         let Model {
             ground,
@@ -579,12 +588,12 @@ impl<T: Real, M: DerefMut<Target = Model<T>>> ModelBuilder<T, M> {
             groups,
             ..
         } = &mut *self.m;
+        let points = Points { ground, links };
         if groups.is_full() {
-            // The constructor's own errors come first, as in `group`.
-            spec.build(&self.m)?;
+            // Unlike `group`, before the constructor's own errors: its group would have
+            // to be written apart (2 KB in f64 on the stack, and code of its own).
             return Err(ModelError::Capacity("groups"));
         }
-        let points = Points { ground, links };
         let _ = groups.push(Group::empty());
         let written = match groups.last_mut() {
             Some(g) => spec.write(&points, g),
@@ -647,7 +656,7 @@ impl<T: Real, M: DerefMut<Target = Model<T>>> ModelBuilder<T, M> {
 /// Validates a declared model and completes its derived data (Newton tolerance, the
 /// drives' motor elements): the end of [`ModelBuilder::build`] and
 /// [`ModelBuilder::finish`].
-fn validate<T: Real>(m: &mut Model<T>) -> Result<(), ModelError> {
+fn validate<T: Real, C: Capacity<T>>(m: &mut Model<T, C>) -> Result<(), ModelError> {
     let size = validate_bodies(m)?;
     // After the points: a group's values derive from them, and a non-finite point
     // is named as such above.
@@ -672,7 +681,10 @@ fn validate<T: Real>(m: &mut Model<T>) -> Result<(), ModelError> {
 /// which a finite mechanism of finite size squared keeps finite (differences of its
 /// points, their lengths, directions and angles). `dof` is the number of coordinates
 /// the sequence drives.
-fn validate_rebuilt<T: Real>(m: &mut Model<T>, dof: u8) -> Result<(), ModelError> {
+fn validate_rebuilt<T: Real, C: Capacity<T>>(
+    m: &mut Model<T, C>,
+    dof: u8,
+) -> Result<(), ModelError> {
     let size = validate_bodies(m)?;
     for (k, g) in m.groups.iter().enumerate() {
         if !g.guess.iter().all(|x| x.finite()) {
@@ -690,7 +702,7 @@ fn validate_rebuilt<T: Real>(m: &mut Model<T>, dof: u8) -> Result<(), ModelError
 /// The first part of [`validate`]: gravity, the singularity threshold, the ground
 /// points and the links, and the Newton tolerance from the mechanism's scale; returns
 /// the mechanism's size (twice its largest coordinate, m).
-fn validate_bodies<T: Real>(m: &mut Model<T>) -> Result<T, ModelError> {
+fn validate_bodies<T: Real, C: Capacity<T>>(m: &mut Model<T, C>) -> Result<T, ModelError> {
     if !(m.gravity.x.finite() && m.gravity.y.finite()) {
         return Err(ModelError::NonFinite("gravity"));
     }
@@ -754,7 +766,10 @@ fn validate_bodies<T: Real>(m: &mut Model<T>) -> Result<T, ModelError> {
 
 /// The last part of [`validate`], after the sequence: each drive's motor element and
 /// motor law, each load's body and values (`size`: the mechanism's, m).
-fn validate_drives_and_loads<T: Real>(m: &mut Model<T>, size: T) -> Result<(), ModelError> {
+fn validate_drives_and_loads<T: Real, C: Capacity<T>>(
+    m: &mut Model<T, C>,
+    size: T,
+) -> Result<(), ModelError> {
     let Model {
         drives,
         groups,
@@ -872,7 +887,7 @@ fn finite2<T: Real>(v: &Vec2<T>, what: &'static str) -> Result<(), ModelError> {
 
 /// Checks that the sequence places every link once, each group using only what earlier
 /// groups placed, and that the coordinates are `0..dof`, each driven.
-fn check_sequence<T: Real>(m: &mut Model<T>) -> Result<(), ModelError> {
+fn check_sequence<T: Real, C: Capacity<T>>(m: &mut Model<T, C>) -> Result<(), ModelError> {
     let mut placed = [false; MAX_LINKS + 1];
     placed[0] = true;
     let mut coord_used = [false; MAX_DOF];

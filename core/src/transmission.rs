@@ -8,6 +8,7 @@
 //!
 //! `P` stacks `(x_G, y_G, θ)` of every moving link: rows `3(i-1)..3i` for body `i`.
 
+use crate::capacity::Capacity;
 use crate::config::{MAX_BODIES, MAX_DOF, MAX_GROUPS, MAX_GROUP_VARS, POSE_ROWS};
 use crate::error::StepError;
 use crate::kinematics::{acceleration, position, unit_rate, velocity};
@@ -19,7 +20,11 @@ use nalgebra::{SMatrix, SVector};
 
 /// Writes the COG velocities (`ẋ_G, ẏ_G, θ̇` per link) of the last velocity pass into
 /// column `j` of `V` and the groups' `ẋ` into column `j` of their `C`.
-fn record_velocity_column<T: Real>(model: &Model<T>, ws: &mut Workspace<T>, j: usize) {
+fn record_velocity_column<T: Real, C: Capacity<T>>(
+    model: &Model<T, C>,
+    ws: &mut Workspace<T, C>,
+    j: usize,
+) {
     let Workspace { body, group, v, .. } = ws;
     // Column j of the column-major V: its live rows, 3 per link.
     if let Some(col) = v.as_mut_slice().get_mut(j * POSE_ROWS..(j + 1) * POSE_ROWS) {
@@ -49,8 +54,8 @@ fn record_velocity_column<T: Real>(model: &Model<T>, ws: &mut Workspace<T>, j: u
 
 /// COG accelerations (`ẍ_G, ÿ_G, θ̈` per link) of the last acceleration pass, into the
 /// live rows of `a`.
-pub(crate) fn cog_accelerations<T: Real>(
-    model: &Model<T>,
+pub(crate) fn cog_accelerations<T: Real, C: Capacity<T>>(
+    model: &Model<T, C>,
     bodies: &[BodyState<T>],
     a: &mut SVector<T, POSE_ROWS>,
 ) {
@@ -72,9 +77,9 @@ pub(crate) fn cog_accelerations<T: Real>(
 /// Evaluates the kinematics at `(q, q̇)`: positions, `V`, `C`, `a_b` and each group's
 /// `ẍ` bias. Leaves the bodies at the actual velocities and at the accelerations of
 /// `q̈ = 0`. `time` (s) is for error messages.
-pub fn evaluate<T: Real>(
-    model: &Model<T>,
-    ws: &mut Workspace<T>,
+pub fn evaluate<T: Real, C: Capacity<T>>(
+    model: &Model<T, C>,
+    ws: &mut Workspace<T, C>,
     q: &[T],
     qd: &[T],
     time: f64,
@@ -93,9 +98,9 @@ pub fn evaluate<T: Real>(
 /// bodies and groups, without the acceleration pass (the bodies' and groups'
 /// accelerations are left as they were). For what needs speeds only, e.g. locating an
 /// event whose function is a speed.
-pub fn evaluate_velocities<T: Real>(
-    model: &Model<T>,
-    ws: &mut Workspace<T>,
+pub fn evaluate_velocities<T: Real, C: Capacity<T>>(
+    model: &Model<T, C>,
+    ws: &mut Workspace<T, C>,
     q: &[T],
     qd: &[T],
     time: f64,
@@ -185,16 +190,16 @@ fn times_rates<T: Real, const R: usize>(
 /// (into `vars`, in sequence order) at the configuration of the last position pass, by
 /// polarization. Overwrites the workspace's body velocities and accelerations: call
 /// [`evaluate`] again before using them.
-pub fn second_derivative<T: Real>(
-    model: &Model<T>,
-    ws: &mut Workspace<T>,
+pub fn second_derivative<T: Real, C: Capacity<T>>(
+    model: &Model<T, C>,
+    ws: &mut Workspace<T, C>,
     j: usize,
     k: usize,
     pose: &mut SVector<T, POSE_ROWS>,
     vars: &mut [[T; MAX_GROUP_VARS]; MAX_GROUPS],
 ) {
     let zero = [T::zero(); MAX_DOF];
-    let pass = |rate: &[T; MAX_DOF], ws: &mut Workspace<T>| {
+    let pass = |rate: &[T; MAX_DOF], ws: &mut Workspace<T, C>| {
         velocity(model, ws, rate);
         acceleration(model, ws, rate, &zero);
         let mut x = [[T::zero(); MAX_GROUP_VARS]; MAX_GROUPS];

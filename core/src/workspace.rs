@@ -2,6 +2,7 @@
 //! workspace per simulation (and per thread); algorithms are functions over
 //! `(&Model, &mut Workspace)`.
 
+use crate::capacity::{ArrayStorage, Capacity, Generic};
 use crate::config::{
     MAX_BODIES, MAX_DOF, MAX_DRIVES, MAX_GROUPS, MAX_GROUP_JOINTS, MAX_GROUP_VARS, POSE_ROWS,
 };
@@ -100,13 +101,14 @@ impl<T: Real> Default for Predictor<T> {
 /// Every group's [`Predictor`].
 pub type Predictors<T> = [Predictor<T>; MAX_GROUPS];
 
-/// Preallocated buffers of a mechanism's evaluation.
+/// Preallocated buffers of a mechanism's evaluation; its per-group arrays sized by the
+/// capacity `C` (that of the model it evaluates).
 #[derive(Debug, PartialEq)]
-pub struct Workspace<T: Real> {
+pub struct Workspace<T: Real, C: Capacity<T> = Generic> {
     /// Body states (index 0: the ground, at rest).
     pub body: [BodyState<T>; MAX_BODIES],
     /// Group states and scratch, in sequence order.
-    pub group: [GroupData<T>; MAX_GROUPS],
+    pub group: C::GroupData,
     /// Coordinates of the last evaluation.
     pub q: [T; MAX_DOF],
     /// Their rates.
@@ -133,12 +135,12 @@ pub struct Workspace<T: Real> {
     /// acts between its link and the ground.
     pub applied_moment: [T; MAX_BODIES],
     /// Joint reactions of each group (kinetostatics), in the order of its joints.
-    pub reactions: [[Reaction<T>; MAX_GROUP_JOINTS]; MAX_GROUPS],
+    pub reactions: C::Reactions,
     /// Evaluations of the equations of motion so far.
     pub evaluations: u64,
 }
 
-impl<T: Real> Clone for Workspace<T> {
+impl<T: Real, C: Capacity<T>> Clone for Workspace<T, C> {
     fn clone(&self) -> Self {
         let mut w = Self::new();
         w.clone_from(self);
@@ -183,7 +185,7 @@ impl<T: Real> Clone for Workspace<T> {
 /// The fields [`Workspace::init`] writes: a field added to [`Workspace`] and not there
 /// fails to compile here.
 #[allow(dead_code)]
-fn fields_of<T: Real>(w: &Workspace<T>) {
+fn fields_of<T: Real, C: Capacity<T>>(w: &Workspace<T, C>) {
     let Workspace {
         body: _,
         group: _,
@@ -202,18 +204,18 @@ fn fields_of<T: Real>(w: &Workspace<T>) {
     } = w;
 }
 
-impl<T: Real> Default for Workspace<T> {
+impl<T: Real, C: Capacity<T>> Default for Workspace<T, C> {
     fn default() -> Self {
         Self::new()
     }
 }
 
-impl<T: Real> Workspace<T> {
+impl<T: Real, C: Capacity<T>> Workspace<T, C> {
     /// A zeroed workspace.
     pub fn new() -> Self {
         Workspace {
             body: [BodyState::default(); MAX_BODIES],
-            group: [GroupData::default(); MAX_GROUPS],
+            group: ArrayStorage::filled(GroupData::default()),
             q: [T::zero(); MAX_DOF],
             qd: [T::zero(); MAX_DOF],
             qdd: [T::zero(); MAX_DOF],
@@ -224,7 +226,7 @@ impl<T: Real> Workspace<T> {
             gen_force: SVector::zeros(),
             motor: [T::zero(); MAX_DRIVES],
             applied_moment: [T::zero(); MAX_BODIES],
-            reactions: [[Reaction::default(); MAX_GROUP_JOINTS]; MAX_GROUPS],
+            reactions: ArrayStorage::filled([Reaction::default(); MAX_GROUP_JOINTS]),
             evaluations: 0,
         }
     }
@@ -243,7 +245,7 @@ impl<T: Real> Workspace<T> {
             for b in elements(uninit(addr_of_mut!((*p).body))) {
                 b.write(BodyState::default());
             }
-            for g in elements(uninit(addr_of_mut!((*p).group))) {
+            for g in C::GroupData::elements(uninit(addr_of_mut!((*p).group))) {
                 g.write(GroupData::default());
             }
             addr_of_mut!((*p).q).write([T::zero(); MAX_DOF]);
@@ -256,7 +258,7 @@ impl<T: Real> Workspace<T> {
             addr_of_mut!((*p).gen_force).write(SVector::zeros());
             addr_of_mut!((*p).motor).write([T::zero(); MAX_DRIVES]);
             addr_of_mut!((*p).applied_moment).write([T::zero(); MAX_BODIES]);
-            for r in elements(uninit(addr_of_mut!((*p).reactions))) {
+            for r in C::Reactions::elements(uninit(addr_of_mut!((*p).reactions))) {
                 r.write([Reaction::default(); MAX_GROUP_JOINTS]);
             }
             addr_of_mut!((*p).evaluations).write(0);
@@ -312,7 +314,7 @@ impl<T: Real> Workspace<T> {
     }
 
     /// World position of link `body`'s centre of gravity, m.
-    pub fn cog(&self, model: &crate::model::Model<T>, body: u8) -> Vec2<T> {
+    pub fn cog(&self, model: &crate::model::Model<T, C>, body: u8) -> Vec2<T> {
         match (self.body.get(body as usize), model.link(body)) {
             (Some(b), Some(l)) => b.o + crate::scalar::rotate_cs(b.c, b.s, &l.cog),
             _ => Vec2::zeros(),

@@ -12,6 +12,7 @@
 
 use super::mode::{Clutch, Coordinates, Mode};
 use super::params::{circle_meet, CccParams};
+use crate::capacity::Capacity;
 use crate::config::MAX_BODIES;
 use crate::error::ModelError;
 use crate::model::{Link, Model, ModelBuilder};
@@ -114,12 +115,12 @@ pub(crate) fn build<T: Real>(
 /// passes the full validation (the tests build them all with [`build`]), so only what
 /// the pose and the parameters can make invalid is checked again
 /// ([`ModelBuilder::finish_rebuilt`]): the same model, the same errors.
-pub(crate) fn build_into<T: Real>(
+pub(crate) fn build_into<T: Real, C: Capacity<T>>(
     p: &CccParams<T>,
     mode: Mode,
     coords: Coordinates,
     pose: &[T; 9],
-    model: &mut Model<T>,
+    model: &mut Model<T, C>,
 ) -> Result<BodyMap<T>, ModelError> {
     let mut b = ModelBuilder::in_place(model);
     let map = declare(&mut b, p, mode, coords, pose)?;
@@ -128,7 +129,7 @@ pub(crate) fn build_into<T: Real>(
 }
 
 /// Declares the model of [`build`] into the builder `b`; returns the body map.
-fn declare<T: Real, M: DerefMut<Target = Model<T>>>(
+fn declare<T: Real, C: Capacity<T>, M: DerefMut<Target = Model<T, C>>>(
     b: &mut ModelBuilder<T, M>,
     p: &CccParams<T>,
     mode: Mode,

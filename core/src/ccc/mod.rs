@@ -13,8 +13,8 @@ pub use params::{Bar, CccParams, DriveDirection, Side};
 mod twin;
 
 pub use twin::{
-    energy_tolerance, Audit, CoordinateSwitch, Event, EventKind, Failure, Inputs, LinkState,
-    MotorInput, Twin, TwinSettings, TwinSetupError, TwinStepError, DIODE_HORIZON_STEPS,
+    energy_tolerance, Audit, Converter, CoordinateSwitch, Event, EventKind, Failure, Inputs,
+    LinkState, MotorInput, Twin, TwinSettings, TwinSetupError, TwinStepError, DIODE_HORIZON_STEPS,
     ENERGY_TOL_STEP, JOINTS, JOINT_NAMES, MAX_EVENTS_PER_STEP, MAX_LOCATE_ITER, MAX_RETRIES,
     SINGULAR_CONDITIONING, SUBSTEPS,
 };

@@ -18,6 +18,7 @@
 use super::{
     guesses, Angle, Base, Chain, Group, GroupKind, Joint, JointKind, Placement, PointRef, Term,
 };
+use crate::capacity::Capacity;
 use crate::config::MAX_GROUP_LINKS;
 use crate::error::ModelError;
 use crate::model::{GroupSpec, Model, Points, WriteGroup};
@@ -75,7 +76,7 @@ pub struct AssurGroup<'a, T: Real> {
 
 impl<T: Real> AssurGroup<'_, T> {
     /// Builds the group's description.
-    pub fn build(&self, model: &Model<T>) -> Result<Group<T>, ModelError> {
+    pub fn build<C: Capacity<T>>(&self, model: &Model<T, C>) -> Result<Group<T>, ModelError> {
         let mut g = Group::empty();
         self.write(&model.points(), &mut g)?;
         Ok(g)

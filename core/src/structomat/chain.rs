@@ -10,6 +10,7 @@
 //! rates (or accelerations) set to zero, so no term is written twice.
 
 use super::{Angle, Base, Chain, Group, GroupKind, Length, PointRef, Term};
+use crate::capacity::Capacity;
 use crate::config::{MAX_CHAINS, MAX_DOF, MAX_GROUP_VARS, MAX_TERMS};
 use crate::error::GroupFault;
 use crate::model::Model;
@@ -210,8 +211,8 @@ fn length_at<T: Real>(s: Length, x: &[T], q: &[T]) -> T {
 
 /// World position of a point of a placed body (ground points are world coordinates).
 #[inline]
-pub(crate) fn point_pos<T: Real>(
-    model: &Model<T>,
+pub(crate) fn point_pos<T: Real, C: Capacity<T>>(
+    model: &Model<T, C>,
     bodies: &[BodyState<T>],
     p: PointRef,
 ) -> Vec2<T> {
@@ -226,8 +227,8 @@ pub(crate) fn point_pos<T: Real>(
 
 /// World velocity of a point of a placed body, m/s.
 #[inline]
-pub(crate) fn point_vel<T: Real>(
-    model: &Model<T>,
+pub(crate) fn point_vel<T: Real, C: Capacity<T>>(
+    model: &Model<T, C>,
     bodies: &[BodyState<T>],
     p: PointRef,
 ) -> Vec2<T> {
@@ -242,8 +243,8 @@ pub(crate) fn point_vel<T: Real>(
 
 /// World acceleration of a point of a placed body, m/s².
 #[inline]
-pub(crate) fn point_acc<T: Real>(
-    model: &Model<T>,
+pub(crate) fn point_acc<T: Real, C: Capacity<T>>(
+    model: &Model<T, C>,
     bodies: &[BodyState<T>],
     p: PointRef,
 ) -> Vec2<T> {
@@ -376,9 +377,9 @@ fn term_unknown<T: Real>(t: &Term<T>, c: &TermCache<T>, u: &[T]) -> Vec2<T> {
 
 /// `start - end` of every closing chain (m): the known part of its residual, the same
 /// for every Newton-Raphson iterate.
-pub(crate) fn chain_gaps<T: Real>(
+pub(crate) fn chain_gaps<T: Real, C: Capacity<T>>(
     g: &Group<T>,
-    model: &Model<T>,
+    model: &Model<T, C>,
     bodies: &[BodyState<T>],
 ) -> [Vec2<T>; MAX_CHAINS] {
     let mut gaps = [Vec2::zeros(); MAX_CHAINS];
@@ -677,10 +678,10 @@ fn factor_w<T: Real, const N: usize>(
 }
 
 /// Sets the pose of every link of the group from the cached terms.
-pub(crate) fn place<T: Real>(
+pub(crate) fn place<T: Real, C: Capacity<T>>(
     g: &Group<T>,
     gd: &GroupData<T>,
-    model: &Model<T>,
+    model: &Model<T, C>,
     bodies: &mut [BodyState<T>],
     q: &[T],
 ) {
@@ -758,10 +759,10 @@ pub(crate) fn link_acceleration<T: Real>(
 }
 
 /// With `gd.x` solved: caches the terms, factors `W` and places the links.
-pub(crate) fn position_from_x<T: Real>(
+pub(crate) fn position_from_x<T: Real, C: Capacity<T>>(
     g: &Group<T>,
     gd: &mut GroupData<T>,
-    model: &Model<T>,
+    model: &Model<T, C>,
     bodies: &mut [BodyState<T>],
     q: &[T],
 ) -> Result<T, GroupFault> {
@@ -771,10 +772,10 @@ pub(crate) fn position_from_x<T: Real>(
 
 /// [`position_from_x`] when the terms are already cached at `gd.x` (Newton-Raphson's
 /// converged iterate: its residual check evaluated them there).
-pub(crate) fn position_from_terms<T: Real>(
+pub(crate) fn position_from_terms<T: Real, C: Capacity<T>>(
     g: &Group<T>,
     gd: &mut GroupData<T>,
-    model: &Model<T>,
+    model: &Model<T, C>,
     bodies: &mut [BodyState<T>],
     q: &[T],
 ) -> Result<T, GroupFault> {
@@ -785,10 +786,10 @@ pub(crate) fn position_from_terms<T: Real>(
 
 /// [`position_from_terms`] with `W` at the cached terms already built (`w`, by
 /// [`Arms::eval`]; `N` the size [`factor`] picks for the group's `n`).
-pub(crate) fn position_from_jacobian<T: Real, const N: usize>(
+pub(crate) fn position_from_jacobian<T: Real, const N: usize, C: Capacity<T>>(
     g: &Group<T>,
     gd: &mut GroupData<T>,
-    model: &Model<T>,
+    model: &Model<T, C>,
     bodies: &mut [BodyState<T>],
     q: &[T],
     w: &[[T; N]; N],
@@ -804,7 +805,12 @@ pub(crate) fn position_from_jacobian<T: Real, const N: usize>(
 /// for each without a match per term.
 trait PassLevel<T: Real> {
     /// The level's derivative of a known point.
-    fn point(&self, model: &Model<T>, bodies: &[BodyState<T>], p: PointRef) -> Vec2<T>;
+    fn point<C: Capacity<T>>(
+        &self,
+        model: &Model<T, C>,
+        bodies: &[BodyState<T>],
+        p: PointRef,
+    ) -> Vec2<T>;
     /// A term's derivative with the group's unknown derivatives zero (its known part);
     /// `xd` are the unknowns' rates (used by the acceleration level).
     fn known_term(
@@ -834,7 +840,12 @@ struct Vel<'a, T> {
 
 impl<T: Real> PassLevel<T> for Vel<'_, T> {
     #[inline]
-    fn point(&self, model: &Model<T>, bodies: &[BodyState<T>], p: PointRef) -> Vec2<T> {
+    fn point<C: Capacity<T>>(
+        &self,
+        model: &Model<T, C>,
+        bodies: &[BodyState<T>],
+        p: PointRef,
+    ) -> Vec2<T> {
         point_vel(model, bodies, p)
     }
     #[inline]
@@ -874,7 +885,12 @@ struct Acc<'a, T> {
 
 impl<T: Real> PassLevel<T> for Acc<'_, T> {
     #[inline]
-    fn point(&self, model: &Model<T>, bodies: &[BodyState<T>], p: PointRef) -> Vec2<T> {
+    fn point<C: Capacity<T>>(
+        &self,
+        model: &Model<T, C>,
+        bodies: &[BodyState<T>],
+        p: PointRef,
+    ) -> Vec2<T> {
         point_acc(model, bodies, p)
     }
     #[inline]
@@ -912,10 +928,10 @@ impl<T: Real> PassLevel<T> for Acc<'_, T> {
 /// accelerations) from the chains' prefix sums. Each term's known part is evaluated
 /// once: it makes the right-hand side, and with the term's `W` columns times `u` its
 /// whole derivative in the prefix sums.
-fn linear_pass<T: Real>(
+fn linear_pass<T: Real, C: Capacity<T>>(
     g: &Group<T>,
     gd: &mut GroupData<T>,
-    model: &Model<T>,
+    model: &Model<T, C>,
     bodies: &mut [BodyState<T>],
     level: &impl PassLevel<T>,
 ) {
@@ -1017,10 +1033,10 @@ fn solve_factored<T: Real>(
 /// matched once per pass instead of in every loop. Returns `false`, having changed
 /// nothing, for a group that is not all arms (the general pass then serves it).
 #[inline]
-fn arm_pass<T: Real>(
+fn arm_pass<T: Real, C: Capacity<T>>(
     g: &Group<T>,
     gd: &mut GroupData<T>,
-    model: &Model<T>,
+    model: &Model<T, C>,
     bodies: &mut [BodyState<T>],
     level: &impl PassLevel<T>,
 ) -> bool {
@@ -1101,10 +1117,10 @@ fn arm_pass<T: Real>(
 /// triad and a general Assur group (all arms, as their builders make them), else (or
 /// if it refuses the group) the general [`linear_pass`].
 #[inline]
-fn any_linear_pass<T: Real>(
+fn any_linear_pass<T: Real, C: Capacity<T>>(
     g: &Group<T>,
     gd: &mut GroupData<T>,
-    model: &Model<T>,
+    model: &Model<T, C>,
     bodies: &mut [BodyState<T>],
     level: &impl PassLevel<T>,
 ) {
@@ -1117,10 +1133,10 @@ fn any_linear_pass<T: Real>(
 }
 
 /// Solves `W ẋ = -(known part of ḟ)` and sets the links' velocities.
-pub(crate) fn velocity_pass<T: Real>(
+pub(crate) fn velocity_pass<T: Real, C: Capacity<T>>(
     g: &Group<T>,
     gd: &mut GroupData<T>,
-    model: &Model<T>,
+    model: &Model<T, C>,
     bodies: &mut [BodyState<T>],
     qd: &[T],
 ) {
@@ -1133,10 +1149,10 @@ pub(crate) fn velocity_pass<T: Real>(
 
 /// Solves `W ẍ = -(f̈ with ẍ = 0)` and sets the links' accelerations (needs the
 /// velocity pass with the actual speeds first).
-pub(crate) fn acceleration_pass<T: Real>(
+pub(crate) fn acceleration_pass<T: Real, C: Capacity<T>>(
     g: &Group<T>,
     gd: &mut GroupData<T>,
-    model: &Model<T>,
+    model: &Model<T, C>,
     bodies: &mut [BodyState<T>],
     qd: &[T],
     qdd: &[T],

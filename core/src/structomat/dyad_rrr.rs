@@ -9,6 +9,7 @@ use super::{
     extend, guesses, point_acc, point_pos, point_vel, push_chain, Angle, Base, Group, GroupData,
     GroupKind, Joint, JointKind, Placement, PointRef, Term, TermCache,
 };
+use crate::capacity::Capacity;
 use crate::config::MAX_GROUP_VARS;
 use crate::error::{GroupFault, ModelError};
 use crate::model::{Model, Points, WriteGroup};
@@ -42,7 +43,7 @@ impl<T: Real> DyadRrr<T> {
     /// Builds the group's description. Closed-form constants:
     /// `[la, lb, cos ∠va, sin ∠va, cos ∠wb, sin ∠wb, ∠va, ∠wb]` with
     /// `va = C_a - A_a`, `wb = C_b - B_b` in the link frames.
-    pub fn build(&self, model: &Model<T>) -> Result<Group<T>, ModelError> {
+    pub fn build<C: Capacity<T>>(&self, model: &Model<T, C>) -> Result<Group<T>, ModelError> {
         let mut g = Group::empty();
         self.write(&model.points(), &mut g)?;
         Ok(g)
@@ -167,10 +168,10 @@ fn parts<T: Real>(g: &Group<T>) -> Result<Parts<'_, T>, GroupFault> {
 /// `w_b = -R(θb) wb = B - C`, `W = [J w_a, J w_b]`, `det W = w_a × w_b`, and the
 /// column norms are the link lengths: the conditioning `|w_a × w_b| / (la lb)` is the
 /// sine of the transmission angle at C.
-pub(crate) fn solve<T: Real>(
+pub(crate) fn solve<T: Real, C: Capacity<T>>(
     g: &Group<T>,
     gd: &mut GroupData<T>,
-    model: &Model<T>,
+    model: &Model<T, C>,
     bodies: &mut [BodyState<T>],
     singular_tol: T,
 ) -> Result<T, GroupFault> {
@@ -262,10 +263,10 @@ fn solve_2<T: Real>(gd: &GroupData<T>, r: Vec2<T>) -> [T; 2] {
 /// for its two arms): `W ẋ = v_B - v_A` (the arms turn only with the unknowns), then
 /// link a turns about A at `θ̇a` and link b about C, whose velocity is
 /// `v_A + θ̇a J w_a`.
-pub(crate) fn velocity<T: Real>(
+pub(crate) fn velocity<T: Real, C: Capacity<T>>(
     g: &Group<T>,
     gd: &mut GroupData<T>,
-    model: &Model<T>,
+    model: &Model<T, C>,
     bodies: &mut [BodyState<T>],
 ) {
     let Ok((start, end, pl_a, pl_b)) = parts(g) else {
@@ -290,10 +291,10 @@ pub(crate) fn velocity<T: Real>(
 /// Acceleration pass of the dyad (after its velocity pass):
 /// `W ẍ = a_B - a_A + θ̇a² w_a + θ̇b² w_b` (the arms' centripetal parts), then link a
 /// about A and link b about C, whose acceleration is `a_A + θ̈a J w_a - θ̇a² w_a`.
-pub(crate) fn acceleration<T: Real>(
+pub(crate) fn acceleration<T: Real, C: Capacity<T>>(
     g: &Group<T>,
     gd: &mut GroupData<T>,
-    model: &Model<T>,
+    model: &Model<T, C>,
     bodies: &mut [BodyState<T>],
 ) {
     let Ok((start, end, pl_a, pl_b)) = parts(g) else {

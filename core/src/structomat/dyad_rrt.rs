@@ -12,6 +12,7 @@ use super::{
     chain, guesses, list, point_pos, Angle, Base, Group, GroupData, GroupKind, Joint, JointKind,
     Length, Placement, PointRef, Term,
 };
+use crate::capacity::Capacity;
 use crate::error::{GroupFault, ModelError};
 use crate::model::Model;
 use crate::scalar::{rotate_cs, unit, Real, Vec2};
@@ -47,7 +48,7 @@ pub struct DyadRrt<T: Real> {
 impl<T: Real> DyadRrt<T> {
     /// Builds the group's description. Closed-form constants:
     /// `[lr, cos α, sin α, α, 0, 0, 0, 0]` with `α = ∠(C_r - A_r)` in the rod's frame.
-    pub fn build(&self, model: &Model<T>) -> Result<Group<T>, ModelError> {
+    pub fn build<C: Capacity<T>>(&self, model: &Model<T, C>) -> Result<Group<T>, ModelError> {
         let ra = model.local(self.rod, self.rod_at_pole, "dyad RRT: rod at pole")?;
         let rc = model.local(self.rod, self.rod_joint, "dyad RRT: rod at pin")?;
         let sc = model.local(self.slider, self.slider_joint, "dyad RRT: slider at pin")?;
@@ -152,10 +153,10 @@ impl<T: Real> DyadRrt<T> {
 }
 
 /// Closed-form position on the branch `gd.branch`: writes `gd.x`.
-pub(crate) fn solve<T: Real>(
+pub(crate) fn solve<T: Real, C: Capacity<T>>(
     g: &Group<T>,
     gd: &mut GroupData<T>,
-    model: &Model<T>,
+    model: &Model<T, C>,
     bodies: &[BodyState<T>],
 ) -> Result<(), GroupFault> {
     let (ch, end) = super::chain::closing_chain(g)?;

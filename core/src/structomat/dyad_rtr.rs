@@ -11,6 +11,7 @@ use super::{
     chain, guesses, list, point_pos, Angle, Base, Group, GroupData, GroupKind, Joint, JointKind,
     Length, Placement, PointRef, Term,
 };
+use crate::capacity::Capacity;
 use crate::error::{GroupFault, ModelError};
 use crate::model::Model;
 use crate::scalar::{rotate_cs, unit, Real, Vec2};
@@ -45,7 +46,7 @@ pub struct DyadRtr<T: Real> {
 
 impl<T: Real> DyadRtr<T> {
     /// Builds the group's description. Closed-form constants: `[c.x, c.y, d.x, d.y]`.
-    pub fn build(&self, model: &Model<T>) -> Result<Group<T>, ModelError> {
+    pub fn build<C: Capacity<T>>(&self, model: &Model<T, C>) -> Result<Group<T>, ModelError> {
         let aa = model.local(self.a, self.a_at_pole, "dyad RTR: a at pole")?;
         let asl = model.local(self.a, self.a_on_line, "dyad RTR: a on line")?;
         let bb = model.local(self.b, self.b_at_pole, "dyad RTR: b at pole")?;
@@ -137,10 +138,10 @@ impl<T: Real> DyadRtr<T> {
 }
 
 /// Closed-form position on the branch `gd.branch`: writes `gd.x`.
-pub(crate) fn solve<T: Real>(
+pub(crate) fn solve<T: Real, C: Capacity<T>>(
     g: &Group<T>,
     gd: &mut GroupData<T>,
-    model: &Model<T>,
+    model: &Model<T, C>,
     bodies: &[BodyState<T>],
 ) -> Result<(), GroupFault> {
     let (ch, end) = super::chain::closing_chain(g)?;

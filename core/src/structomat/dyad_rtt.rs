@@ -9,6 +9,7 @@ use super::{
     chain, guesses, list, Angle, Base, Group, GroupKind, Joint, JointKind, Length, Placement,
     PointRef, Term,
 };
+use crate::capacity::Capacity;
 use crate::error::ModelError;
 use crate::model::Model;
 use crate::scalar::{unit, Real, Vec2};
@@ -44,7 +45,7 @@ pub struct DyadRtt<T: Real> {
 
 impl<T: Real> DyadRtt<T> {
     /// Builds the group's description.
-    pub fn build(&self, model: &Model<T>) -> Result<Group<T>, ModelError> {
+    pub fn build<C: Capacity<T>>(&self, model: &Model<T, C>) -> Result<Group<T>, ModelError> {
         let aa = model.local(self.a, self.a_at_pole, "dyad RTT: a at pole")?;
         let asl = model.local(self.a, self.a_on_line, "dyad RTT: a on line")?;
         let bg = model.local(self.b, self.b_on_guide, "dyad RTT: b on guide")?;

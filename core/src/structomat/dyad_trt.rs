@@ -8,6 +8,7 @@ use super::{
     chain, guesses, list, Angle, Base, Group, GroupKind, Joint, JointKind, Length, Placement,
     PointRef, Term,
 };
+use crate::capacity::Capacity;
 use crate::error::ModelError;
 use crate::model::Model;
 use crate::scalar::{unit, Real, Vec2};
@@ -43,7 +44,7 @@ pub struct DyadTrt<T: Real> {
 
 impl<T: Real> DyadTrt<T> {
     /// Builds the group's description.
-    pub fn build(&self, model: &Model<T>) -> Result<Group<T>, ModelError> {
+    pub fn build<C: Capacity<T>>(&self, model: &Model<T, C>) -> Result<Group<T>, ModelError> {
         let asg = model.local(self.a, self.a_on_guide, "dyad TRT: a on guide")?;
         let ac = model.local(self.a, self.a_joint, "dyad TRT: a at pin")?;
         let bsg = model.local(self.b, self.b_on_guide, "dyad TRT: b on guide")?;

@@ -6,6 +6,7 @@ use super::{
     extend, point_acc, point_pos, point_vel, push_chain, Angle, Base, Group, GroupData, GroupKind,
     Joint, JointKind, Placement, PointRef,
 };
+use crate::capacity::Capacity;
 use crate::config::MAX_GROUP_VARS;
 use crate::error::{GroupFault, ModelError};
 use crate::model::{Model, Points, WriteGroup};
@@ -29,7 +30,7 @@ pub struct MotorR<T: Real> {
 
 impl<T: Real> MotorR<T> {
     /// Builds the group's description against the links declared so far.
-    pub fn build(&self, model: &Model<T>) -> Result<Group<T>, ModelError> {
+    pub fn build<C: Capacity<T>>(&self, model: &Model<T, C>) -> Result<Group<T>, ModelError> {
         let mut g = Group::empty();
         self.write(&model.points(), &mut g)?;
         Ok(g)
@@ -99,10 +100,10 @@ fn get<T: Real>(v: &[T], j: usize) -> T {
 
 /// Position: the link at `θ = q_j + offset` about its pivot (no unknowns: W is empty,
 /// its conditioning 1). Returns det W = 1.
-pub(crate) fn position<T: Real>(
+pub(crate) fn position<T: Real, C: Capacity<T>>(
     g: &Group<T>,
     gd: &mut GroupData<T>,
-    model: &Model<T>,
+    model: &Model<T, C>,
     bodies: &mut [BodyState<T>],
     q: &[T],
 ) -> Result<T, GroupFault> {
@@ -117,10 +118,10 @@ pub(crate) fn position<T: Real>(
 }
 
 /// Velocity pass: `ω = q̇_j`, the link turning about its pivot.
-pub(crate) fn velocity<T: Real>(
+pub(crate) fn velocity<T: Real, C: Capacity<T>>(
     g: &Group<T>,
     gd: &mut GroupData<T>,
-    model: &Model<T>,
+    model: &Model<T, C>,
     bodies: &mut [BodyState<T>],
     qd: &[T],
 ) {
@@ -136,10 +137,10 @@ pub(crate) fn velocity<T: Real>(
 }
 
 /// Acceleration pass (after the velocity pass): `α = q̈_j`.
-pub(crate) fn acceleration<T: Real>(
+pub(crate) fn acceleration<T: Real, C: Capacity<T>>(
     g: &Group<T>,
     gd: &mut GroupData<T>,
-    model: &Model<T>,
+    model: &Model<T, C>,
     bodies: &mut [BodyState<T>],
     qdd: &[T],
 ) {

@@ -4,6 +4,7 @@
 use super::{
     chain, list, Angle, Base, Group, GroupKind, Joint, JointKind, Length, Placement, PointRef, Term,
 };
+use crate::capacity::Capacity;
 use crate::config::MAX_GROUP_VARS;
 use crate::error::ModelError;
 use crate::model::Model;
@@ -28,7 +29,7 @@ pub struct MotorT<T: Real> {
 
 impl<T: Real> MotorT<T> {
     /// Builds the group's description against the links declared so far.
-    pub fn build(&self, model: &Model<T>) -> Result<Group<T>, ModelError> {
+    pub fn build<C: Capacity<T>>(&self, model: &Model<T, C>) -> Result<Group<T>, ModelError> {
         let local = model.local(self.link, self.link_point, "motor element T: link point")?;
         let guide = model.resolve(self.guide, "motor element T: guide point")?;
         let g = self.guide.body;

@@ -13,6 +13,7 @@ use super::chain::{
     chain_gaps, eval_terms, jacobian, position_from_jacobian, position_from_terms, residual, Arms,
 };
 use super::{Base, Group, GroupData, GroupKind, Term};
+use crate::capacity::Capacity;
 use crate::config::{MAX_DOF, MAX_GROUP_VARS, NEWTON_MAX_ITER};
 use crate::error::GroupFault;
 use crate::model::Model;
@@ -114,27 +115,27 @@ fn turn<T: Real>(cs: Vec2<T>, x: T, d: T) -> Vec2<T> {
 /// Solves `f(x) = 0` from `gd.x`, then caches the terms, factors W and places the links.
 /// `qd` are the rates of the last evaluation (the predictor's, see `predict`; empty for
 /// none). Returns det W.
-pub(crate) fn solve<T: Real>(
+pub(crate) fn solve<T: Real, C: Capacity<T>>(
     g: &Group<T>,
     gd: &mut GroupData<T>,
-    model: &Model<T>,
+    model: &Model<T, C>,
     bodies: &mut [BodyState<T>],
     q: &[T],
     qd: &[T],
 ) -> Result<T, GroupFault> {
     // n is even (two rows per closing chain): each size with its own fixed matrices.
     match g.n_vars {
-        2 => solve_n::<T, 2>(g, gd, model, bodies, q, qd),
-        4 => solve_n::<T, 4>(g, gd, model, bodies, q, qd),
-        _ => solve_n::<T, MAX_GROUP_VARS>(g, gd, model, bodies, q, qd),
+        2 => solve_n::<T, 2, C>(g, gd, model, bodies, q, qd),
+        4 => solve_n::<T, 4, C>(g, gd, model, bodies, q, qd),
+        _ => solve_n::<T, MAX_GROUP_VARS, C>(g, gd, model, bodies, q, qd),
     }
 }
 
 /// [`solve`] for `n = N` unknowns (`n = 0` solves nothing and only places).
-fn solve_n<T: Real, const N: usize>(
+fn solve_n<T: Real, const N: usize, C: Capacity<T>>(
     g: &Group<T>,
     gd: &mut GroupData<T>,
-    model: &Model<T>,
+    model: &Model<T, C>,
     bodies: &mut [BodyState<T>],
     q: &[T],
     qd: &[T],

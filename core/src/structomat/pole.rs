@@ -5,6 +5,7 @@
 //! `P = o + R(θ) p`, `Ṗ = ȯ + ω J R(θ) p`, `P̈ = ö + α J R(θ) p - ω² R(θ) p`.
 
 use super::{point_acc, point_pos, point_vel, PointRef};
+use crate::capacity::Capacity;
 use crate::model::Model;
 use crate::scalar::{Real, Vec2};
 use crate::workspace::Workspace;
@@ -21,7 +22,11 @@ pub struct PoleKinematics<T> {
 }
 
 /// Kinematics of the point `p` from the workspace's last evaluation.
-pub fn output_pole<T: Real>(model: &Model<T>, ws: &Workspace<T>, p: PointRef) -> PoleKinematics<T> {
+pub fn output_pole<T: Real, C: Capacity<T>>(
+    model: &Model<T, C>,
+    ws: &Workspace<T, C>,
+    p: PointRef,
+) -> PoleKinematics<T> {
     PoleKinematics {
         pos: point_pos(model, &ws.body, p),
         vel: point_vel(model, &ws.body, p),

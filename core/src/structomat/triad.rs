@@ -11,6 +11,7 @@ use super::{
     extend, guesses, push_chain, Angle, Base, Group, GroupKind, Joint, JointKind, Placement,
     PointRef, Term,
 };
+use crate::capacity::Capacity;
 use crate::error::ModelError;
 use crate::model::{Model, Points, WriteGroup};
 use crate::scalar::Real;
@@ -37,7 +38,7 @@ pub struct TriadRrRrRr<T: Real> {
 
 impl<T: Real> TriadRrRrRr<T> {
     /// Builds the group's description.
-    pub fn build(&self, model: &Model<T>) -> Result<Group<T>, ModelError> {
+    pub fn build<C: Capacity<T>>(&self, model: &Model<T, C>) -> Result<Group<T>, ModelError> {
         let mut g = Group::empty();
         self.write(&model.points(), &mut g)?;
         Ok(g)

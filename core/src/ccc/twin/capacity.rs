@@ -1,13 +1,18 @@
-//! What the converter's mode models need of the core's capacities
-//! ([`config`](crate::config)), checked against them at compile time: the largest of
-//! every mode and coordinate choice (the test below builds them all). The twin's slots
-//! hold models and workspaces sized by the generic limits; these are what one sized for
-//! the converter needs.
+//! What the converter's mode models need of the core's capacities: the largest of every
+//! mode and coordinate choice (the test below builds them all), the capacity
+//! [`Converter`] of the twin's models and workspaces (a slot 20 KB in f64 where the
+//! generic limits take 30 KB), and checked at compile time to fit the core's own
+//! limits ([`config`](crate::config)), which bound what its algorithms index.
 
+use crate::capacity::{Array, Capacity};
 use crate::config::{
     MAX_BODIES, MAX_CHAINS, MAX_DOF, MAX_GROUND_POINTS, MAX_GROUPS, MAX_GROUP_JOINTS,
-    MAX_GROUP_LINKS, MAX_GROUP_VARS, MAX_LINKS, MAX_LINK_POINTS, MAX_TERMS,
+    MAX_GROUP_LINKS, MAX_GROUP_VARS, MAX_LINKS, MAX_LINK_POINTS, MAX_LOADS, MAX_TERMS,
 };
+use crate::model::{Link, Load};
+use crate::scalar::{Real, Vec2};
+use crate::structomat::{Group, GroupData};
+use crate::workspace::Reaction;
 
 /// Groups of a mode's sequence: 5 (free, I0, A6 and A8: the crank, the dyads of the
 /// coupler and rocker, and of each rod and lever).
@@ -29,6 +34,25 @@ pub(crate) const TERMS: usize = 4;
 pub(crate) const GROUP_JOINTS: usize = 9;
 /// Links and unknowns of a group (A68's six-link group).
 pub(crate) const GROUP_LINKS: usize = 6;
+/// External loads: none (the twin applies the motor's and the shaft's torques as the
+/// workspace's applied moments).
+pub(crate) const LOADS: usize = 0;
+
+/// The capacities of the twin's models and workspaces: the lists of [`GROUPS`] groups,
+/// [`LINKS`] links, [`GROUND_POINTS`] ground points and no loads; the rest (a group's
+/// chains, terms, joints and unknowns, a link's points, the bodies and coordinates) at
+/// the core's limits, which are the converter's needs or close to them.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Converter;
+
+impl<T: Real> Capacity<T> for Converter {
+    type GroundPoints = heapless::Vec<Vec2<T>, GROUND_POINTS>;
+    type Links = heapless::Vec<Link<T>, LINKS>;
+    type Groups = heapless::Vec<Group<T>, GROUPS>;
+    type Loads = heapless::Vec<Load<T>, LOADS>;
+    type GroupData = Array<GroupData<T>, GROUPS>;
+    type Reactions = Array<[Reaction<T>; MAX_GROUP_JOINTS], GROUPS>;
+}
 
 const _: () = assert!(
     GROUPS <= MAX_GROUPS
@@ -41,7 +65,8 @@ const _: () = assert!(
         && TERMS <= MAX_TERMS
         && GROUP_JOINTS <= MAX_GROUP_JOINTS
         && GROUP_LINKS <= MAX_GROUP_LINKS
-        && GROUP_LINKS <= MAX_GROUP_VARS,
+        && GROUP_LINKS <= MAX_GROUP_VARS
+        && LOADS <= MAX_LOADS,
     "the converter's mode models fit the core's capacities"
 );
 
@@ -70,6 +95,7 @@ mod tests {
                         continue;
                     };
                     built += 1;
+                    assert!(m.loads().len() <= LOADS);
                     let g = m.groups();
                     let needs = [
                         g.len(),

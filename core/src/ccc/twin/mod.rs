@@ -36,6 +36,7 @@ mod slot;
 mod slots;
 
 pub use audit::Audit;
+pub use capacity::Converter;
 pub use coordinates::CoordinateSwitch;
 pub use error::{Failure, TwinSetupError, TwinStepError};
 pub use guards::{Event, EventKind};

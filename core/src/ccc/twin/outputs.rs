@@ -148,7 +148,7 @@ impl<T: Real> Twin<T> {
     }
 
     /// The current mode's core model.
-    pub fn model(&self) -> &crate::model::Model<T> {
+    pub fn model(&self) -> &crate::model::Model<T, super::Converter> {
         &self.slots.cur().model
     }
 }

@@ -5,6 +5,7 @@
 use super::super::build::{build_into, BodyMap, BRANCHES, CRANK};
 use super::super::mode::{Clutch, Coordinates, Mode};
 use super::super::params::CccParams;
+use super::capacity::Converter;
 use super::error::TwinStepError;
 use super::inputs::Inputs;
 use crate::dynamics::solve_accelerations;
@@ -13,7 +14,7 @@ use crate::in_place::uninit;
 use crate::integrator::OdeSystem;
 use crate::kinematics::assemble;
 use crate::kinematics::{group_id, position};
-use crate::model::{Model, ModelBuilder};
+use crate::model::Model;
 use crate::scalar::{cross, perp, rotate_cs, Real, Vec2};
 use crate::structomat::GroupKind;
 use crate::structomat::JointKind;
@@ -49,12 +50,12 @@ pub struct LinkState<T: Real> {
     pub velocity: Vec2<T>,
 }
 
-/// A mode's model and workspace.
+/// A mode's model and workspace, sized for the converter ([`Converter`]).
 #[derive(Debug)]
 pub(crate) struct Slot<T: Real> {
-    pub model: Model<T>,
+    pub model: Model<T, Converter>,
     pub map: BodyMap<T>,
-    pub ws: Workspace<T>,
+    pub ws: Workspace<T, Converter>,
     pub mode: Mode,
     pub coords: Coordinates,
     /// Whether `model` is the built model of `mode` and `coords` and `ws` holds an
@@ -103,7 +104,7 @@ impl<T: Real> Slot<T> {
     /// A slot to build into: an empty model (no links), not assembled.
     pub fn empty() -> Self {
         Slot {
-            model: ModelBuilder::new().model().clone(),
+            model: Model::empty(),
             map: BodyMap::default(),
             ws: Workspace::new(),
             mode: Mode::Free,
