@@ -19,6 +19,8 @@ pub mod singular;
 pub mod substeps;
 pub mod switch;
 
+#[cfg(doc)]
+use substeps::TOLERANCE_STEP;
 use substeps::{redo_in_substeps, LOCAL_ATOL, LOCAL_RTOL};
 
 /// Why a simulation could not be set up.
@@ -102,8 +104,8 @@ pub struct Simulation<T: Real> {
     /// The end time set by [`Simulation::end_at`]: the step that would pass it lands on
     /// it.
     end: Option<T>,
-    /// The local error allowed for one fixed step ([`substeps`]): absolute (state
-    /// units) and relative to the state's max-norm.
+    /// The local error allowed per [`substeps::TOLERANCE_STEP`] of step: absolute
+    /// (state units) and relative to the state's max-norm.
     local_tol: (T, T),
 }
 
@@ -163,7 +165,7 @@ impl<T: Real> Simulation<T> {
     /// accepted and counted ([`Balance::inexact`]).
     pub fn step(&mut self) -> Result<(), StepError> {
         let start = self.balance;
-        let tol = self.local_tol;
+        let tol = substeps::per_step(self.local_tol, self.step_length());
         self.balance = redo_in_substeps(|n, enforce| {
             self.advance(
                 |sys, dp5, t, y, h| audited_step(sys, dp5, t, y, h, n, &start, (tol, enforce)),
@@ -173,10 +175,10 @@ impl<T: Real> Simulation<T> {
         Ok(())
     }
 
-    /// Sets the local error allowed for one fixed step ([`substeps`]; defaults
-    /// [`LOCAL_ATOL`], [`LOCAL_RTOL`]):
-    /// `atol` in the state's units (rad, m, rad/s, m/s) plus `rtol` of the state's
-    /// max-norm. `atol = ∞` checks the energy balance only. Errors: `atol` is NaN or not
+    /// Sets the local error allowed per [`TOLERANCE_STEP`] (1 ms) of step
+    /// ([`substeps`]; defaults [`LOCAL_ATOL`], [`LOCAL_RTOL`]; a step of `h` is allowed
+    /// `h / 1 ms` of it): `atol` in the state's units (rad, m, rad/s, m/s) plus `rtol`
+    /// of the state's max-norm. `atol = ∞` checks the energy balance only. Errors: `atol` is NaN or not
     /// positive, `rtol` NaN or negative.
     pub fn set_local_tolerance(&mut self, atol: T, rtol: T) -> Result<(), SetupError> {
         if !(atol > T::zero() && rtol >= T::zero()) {
@@ -188,7 +190,7 @@ impl<T: Real> Simulation<T> {
         Ok(())
     }
 
-    /// The local error allowed for one fixed step: `(atol, rtol)`.
+    /// The local error allowed per [`TOLERANCE_STEP`] of step: `(atol, rtol)`.
     pub fn local_tolerance(&self) -> (T, T) {
         self.local_tol
     }
@@ -322,6 +324,19 @@ impl<T: Real> Simulation<T> {
         }
         self.end = Some(t_end);
         Ok(())
+    }
+
+    /// The length of the next step, s: `h`, or less for the step shortened to land on
+    /// the end time of [`Simulation::end_at`]. (The steps of `n·h` are `h` to rounding:
+    /// their tolerance is `h`'s, the same bits every step.)
+    fn step_length(&self) -> T {
+        let t_next = T::c((self.steps + 1) as f64) * self.h;
+        let clamped = self.clamp_to_end(t_next);
+        if clamped < t_next {
+            clamped - self.t
+        } else {
+            self.h
+        }
     }
 
     /// The next step's end time `t_next`, or the end time of [`Simulation::end_at`] if

@@ -295,13 +295,16 @@ fn an_end_at_a_singularity_has_one_exit_status() {
         assert_eq!(code, 0, "{args:?}: {err}");
         let said = format!("{out}{err}");
         if args[0] == four_bar {
-            // Located past the last step (0.862 s), at the dyad that cannot assemble;
-            // within 4.1e-4 s of t*: the run drives the rocker angle there (a dead
-            // point of the crank's), whose speed grows without bound toward t*.
+            // Located past the last step (0.862 s), within 1e-5 s of the analytic t*
+            // (the bound; the summary prints 6 decimals), though the run drives
+            // the rocker's angle there (a dead point of the crank's), whose speed grows
+            // without bound toward t*: located in the first coordinates too
+            // (`Alternatives::locate_singularity`; it was 4.0e-4 s late, at the
+            // rocker's own limit).
             let t = number_after(&said, "ended at a singularity at t = ");
             let t_star = 0.65f64.acos();
             eprintln!("located {t} s, t* = {t_star} s");
-            assert!(t > 0.862 && (t - t_star).abs() < 1e-3, "{said}");
+            assert!(t > 0.862 && (t - t_star).abs() < 1e-5, "{said}");
             assert!(said.contains("(group RRR("), "{said}");
         } else {
             assert!(

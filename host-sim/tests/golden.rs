@@ -75,7 +75,7 @@ const PINS: &[Pin<'static>] = &[
     Pin {
         args: "slider-crank",
         exit: 0,
-        csv: "1c31aa5a096228196fbefb94577c4609c6307939fbe5d53b1016ee08d1228038",
+        csv: "9e185af9b65f6d16f5ea18466671ed0de15adfc182b495a4da38ab45a169e8ad",
         logs: None,
     },
     Pin {

@@ -9,8 +9,10 @@ use super::{Equations, Simulation};
 use crate::config::STATE_DIM;
 use crate::error::{GroupFault, StepError};
 use crate::integrator::Dp5;
+use crate::model::Model;
 use crate::scalar::Real;
 use crate::workspace::Workspace;
+use nalgebra::SVector;
 
 /// Halvings of the step by [`Simulation::locate_failure`]: 2⁻⁴⁰ of the step (1e-15 s
 /// at h = 1 ms), finer than any time a run reports.
@@ -58,31 +60,49 @@ impl<T: Real> Simulation<T> {
     /// The located time within `steps` step lengths and the error of the failing trial
     /// at the bracket's end.
     fn locate(&self, scratch: &mut Workspace<T>, steps: u32) -> Option<(T, StepError)> {
-        let t_next = T::c(self.steps.saturating_add(u64::from(steps.max(1))) as f64) * self.h;
-        let h = t_next - self.t;
-        let trial = |size: T, scratch: &mut Workspace<T>| -> Result<(), StepError> {
-            scratch.clone_from(&self.ws);
-            let mut dp5 = Dp5::<T, STATE_DIM>::new();
-            let (mut t, mut y) = (self.t, self.y);
-            let mut sys = Equations {
-                model: &self.model,
-                ws: scratch,
-            };
-            dp5.step(&mut sys, &mut t, &mut y, size).map(|_| ())
-        };
-        let mut failure = trial(h, scratch).err()?;
-        let (mut lo, mut hi) = (T::zero(), h);
-        let half = T::c(0.5);
-        for _ in 0..LOCATE_HALVINGS {
-            let mid = (lo + hi) * half;
-            match trial(mid, scratch) {
-                Ok(()) => lo = mid,
-                Err(e) => {
-                    hi = mid;
-                    failure = e;
-                }
+        let t_next = self.span_end(steps);
+        locate_from(&self.model, &self.ws, self.t, &self.y, t_next, scratch)
+    }
+
+    /// The end of the span of `steps` step lengths (at least 1) from the state: the
+    /// time `(n + steps)·h`, s.
+    pub(crate) fn span_end(&self, steps: u32) -> T {
+        T::c(self.steps.saturating_add(u64::from(steps.max(1))) as f64) * self.h
+    }
+}
+
+/// The time in `(t, t_end]` at which a single trial DP5 step of `model` from the state
+/// `(t, y)` (`ws` evaluated there) fails: the failing end of the bracket after
+/// [`LOCATE_HALVINGS`] bisections of the trial's size, with that trial's error. `None`
+/// if the whole trial to `t_end` succeeds. `scratch` is overwritten.
+pub(crate) fn locate_from<T: Real>(
+    model: &Model<T>,
+    ws: &Workspace<T>,
+    t: T,
+    y: &SVector<T, STATE_DIM>,
+    t_end: T,
+    scratch: &mut Workspace<T>,
+) -> Option<(T, StepError)> {
+    let h = t_end - t;
+    let trial = |size: T, scratch: &mut Workspace<T>| -> Result<(), StepError> {
+        scratch.clone_from(ws);
+        let mut dp5 = Dp5::<T, STATE_DIM>::new();
+        let (mut t, mut y) = (t, *y);
+        let mut sys = Equations { model, ws: scratch };
+        dp5.step(&mut sys, &mut t, &mut y, size).map(|_| ())
+    };
+    let mut failure = trial(h, scratch).err()?;
+    let (mut lo, mut hi) = (T::zero(), h);
+    let half = T::c(0.5);
+    for _ in 0..LOCATE_HALVINGS {
+        let mid = (lo + hi) * half;
+        match trial(mid, scratch) {
+            Ok(()) => lo = mid,
+            Err(e) => {
+                hi = mid;
+                failure = e;
             }
         }
-        Some((self.t + hi, failure))
     }
+    Some((t + hi, failure))
 }

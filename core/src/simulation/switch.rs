@@ -19,10 +19,10 @@
 //! bodies), the new sequence is assembled at them on the branch nearest the bodies'
 //! poses, and the switch is refused if any link lands more than a tolerance away.
 
-use super::singular::at_singularity;
+use super::singular::{at_singularity, locate_from};
 use super::{check_outputs, check_reactions, Simulation};
 use crate::balance::Balance;
-use crate::config::{MAX_DOF, MAX_GROUPS};
+use crate::config::{MAX_DOF, MAX_GROUPS, STATE_DIM};
 use crate::dynamics::{finish_accelerations, forward};
 use crate::error::{GroupFault, GroupId, ModelError, StepError};
 use crate::kinematics::{assemble_near, group_id};
@@ -31,6 +31,7 @@ use crate::model::Model;
 use crate::scalar::{perp, rotate_cs, Real};
 use crate::structomat::{GroupKind, Term};
 use crate::workspace::{BodyState, Workspace};
+use nalgebra::SVector;
 
 /// When to switch coordinates.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -265,6 +266,66 @@ impl<T: Real, const N: usize> Alternatives<T, N> {
             }
         }
         Ok(switched)
+    }
+
+    /// Where the motion from `sim`'s state meets a singularity of the mechanism within
+    /// `steps` step lengths, in any of its coordinates:
+    /// [`Simulation::locate_singularity`] in the coordinates in use and, while an
+    /// alternative drives, in the first coordinates too (a trial from the same physical
+    /// state in them); the earlier located time, with its error. Call it after a step
+    /// failed (at a singularity, or breaking the energy balance on the way into one).
+    ///
+    /// Why the first coordinates as well: an alternative that drives the links through
+    /// the first coordinates' singular pose need not carry the mechanism through it. The
+    /// stretched four-bar's crank (a flywheel at 1 rad/s) reaches its limit angle where
+    /// coupler and rocker stretch in line; on the rocker's angle φ the crank's inertia
+    /// weighs `I (dθ/dφ)²`, which vanishes there, so φ̇ grows as `(t* - t)^-½` and a trial
+    /// step in φ jumps the pose without an evaluation failing: it fails only at the
+    /// rocker's own limit, 4e-4 s later. In the first coordinates every trial past the
+    /// pose fails (the dyad cannot assemble), so the bisection brackets it.
+    pub fn locate_singularity(
+        &mut self,
+        sim: &Simulation<T>,
+        scratch: &mut Workspace<T>,
+        steps: u32,
+    ) -> Option<(T, StepError)> {
+        let own = sim.locate_singularity(scratch, steps);
+        if self.active == 0 {
+            return own;
+        }
+        let first = self.locate_in_first(sim, scratch, steps);
+        match (own, first) {
+            (Some(a), Some(b)) => Some(if b.0 < a.0 { b } else { a }),
+            (a, b) => a.or(b),
+        }
+    }
+
+    /// [`Simulation::locate_singularity`] in the first coordinates from `sim`'s
+    /// physical state (mapped by [`Alternatives::trial`]), the error naming the first
+    /// sequence's group.
+    fn locate_in_first(
+        &mut self,
+        sim: &Simulation<T>,
+        scratch: &mut Workspace<T>,
+        steps: u32,
+    ) -> Option<(T, StepError)> {
+        let t = self.trial(0, sim)?;
+        let model = self.models.first()?;
+        let mut y = SVector::<T, STATE_DIM>::zeros();
+        for k in 0..model.dof().min(MAX_DOF) {
+            y[k] = t.q[k];
+            y[MAX_DOF + k] = t.qd[k];
+        }
+        locate_from(
+            model,
+            &self.scratch,
+            sim.t,
+            &y,
+            sim.span_end(steps),
+            scratch,
+        )
+        .filter(|(_, e)| at_singularity(e))
+        .map(|(t, e)| (t, e.at_time(t.to_f64())))
     }
 
     /// Switches `sim` to the best alternative if its coordinates are ill-conditioned

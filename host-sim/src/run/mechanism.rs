@@ -96,6 +96,8 @@ pub struct Metered {
     pub inexact: u64,
     /// The largest accepted error estimate relative to the local tolerance.
     pub worst_error: f64,
+    /// When the first of the `inexact` steps ended, s.
+    pub first_inexact: Option<f64>,
 }
 
 /// What a run did (printed as a few lines by its `Display`).
@@ -268,9 +270,12 @@ impl fmt::Display for Summary {
                     b.redone, b.substeps, b.redone_energy, b.redone_error
                 )?;
                 if b.inexact > 0 {
+                    let from = b
+                        .first_inexact
+                        .map_or_else(String::new, |t| format!(", the first at t = {} s", Fig(t)));
                     writeln!(
                         f,
-                        "warning   {} steps over the local error tolerance even in 16 sub-steps (the worst at {:.1e} times it): the motion is too fast for h there; a smaller h is more accurate",
+                        "warning   {} steps over the local error tolerance even in 16 sub-steps{from} (the worst at {:.1e} times it): from there on the motion is less accurate than the tolerance asks (the energy balance still holds on every step); a smaller h makes fewer such steps",
                         b.inexact,
                         b.worst_error
                     )?;
@@ -287,7 +292,7 @@ impl fmt::Display for Summary {
         if !self.switches.is_empty() {
             writeln!(
                 f,
-                "switches  {} changes of coordinates at dead points of the drivers (CSV: accelerations, torques and reactions NaN while another choice drives):",
+                "switches  {} changes of coordinates at dead points of the drivers (the CSV stays in the first coordinates and columns throughout):",
                 self.switches.len()
             )?;
             for s in &self.switches {
@@ -395,6 +400,7 @@ pub fn simulate<T: Real>(
     })?;
     let mut row: Vec<Cell<'_, T>> = Vec::with_capacity(layout.columns.len());
     let mut steps = 0u64;
+    let mut first_inexact: Option<f64> = None;
     let outcome = loop {
         // Kinetostatics at the current state (the one at `steps`).
         if let Err(error) = sim.kinetostatics() {
@@ -462,9 +468,12 @@ pub fn simulate<T: Real>(
                 write_row(&layout, &sim, &switching, &mut row, obs)?;
                 rows += 1;
             }
-            break Err(failure.located(&sim));
+            break Err(failure.located(&sim, &mut switching));
         }
         steps += 1;
+        if first_inexact.is_none() && sim.balance().inexact > 0 {
+            first_inexact = Some(sim.time().to_f64());
+        }
         motors.check(&sim, &switching);
     };
     let wall = start.elapsed();
@@ -546,6 +555,7 @@ pub fn simulate<T: Real>(
                 redone_error: b.redone_error,
                 inexact: b.inexact,
                 worst_error: b.worst_error.to_f64(),
+                first_inexact,
             }
         },
         max_reaction: max.map(|(k, value, time)| MaxReaction {
@@ -673,9 +683,10 @@ impl Failure {
 
     /// A step's failure at a singularity of the mechanism (or its energy balance broken
     /// on the way into one) with the time located inside the step
-    /// ([`Simulation::locate_singularity`]): [`Failure::Singular`]; the others as they
-    /// are.
-    fn located<T: Real>(self, sim: &Simulation<T>) -> Self {
+    /// ([`Simulation::locate_singularity`], in every choice of coordinates when the
+    /// mechanism has alternatives: [`Switching::locate_singularity`]):
+    /// [`Failure::Singular`]; the others as they are.
+    fn located<T: Real>(self, sim: &Simulation<T>, switching: &mut Option<Switching<T>>) -> Self {
         match self {
             Failure::Step {
                 kinetostatics: false,
@@ -683,7 +694,11 @@ impl Failure {
             } if at_singularity(&error) || matches!(error, StepError::EnergyBalance { .. }) => {
                 let mut scratch = Box::new(structomat::Workspace::new());
                 let span = if at_singularity(&error) { 1 } else { 2 };
-                match sim.locate_singularity(&mut scratch, span) {
+                let found = match switching.as_mut() {
+                    Some(s) => s.locate_singularity(sim, &mut scratch, span),
+                    None => sim.locate_singularity(&mut scratch, span),
+                };
+                match found {
                     Some((_, e)) => Failure::Singular(e),
                     None => Failure::step(error),
                 }

@@ -102,6 +102,19 @@ impl<T: Real> Switching<T> {
         Ok(())
     }
 
+    /// Where the motion from `sim`'s state meets a singularity within `steps` step
+    /// lengths, in the coordinates in use or the first ones
+    /// ([`Alternatives::locate_singularity`]).
+    pub fn locate_singularity(
+        &mut self,
+        sim: &Simulation<T>,
+        scratch: &mut structomat::Workspace<T>,
+        steps: u32,
+    ) -> Option<(T, StepError)> {
+        self.evaluated = false;
+        self.alts.locate_singularity(sim, scratch, steps)
+    }
+
     /// Evaluates the first model at `sim`'s state while an alternative drives (the
     /// values [`Switching::value`] reads): call it at each state before its values.
     pub fn evaluate(&mut self, sim: &Simulation<T>) {
