@@ -67,8 +67,8 @@ struct Pin<'a> {
 /// The three mechanism pins (`slider-crank`, `five-bar`, `five-bar --f32`) are
 /// regression values of the steps that keep their local error
 /// (`structomat::simulation::substeps`), checked when minted against an adaptive DP5(4)
-/// run of the same files at rtol = atol = 1e-12: slider-crank q1 within 9.1e-12 rad
-/// over its 10 s; five-bar q1 within 7.6e-12 rad to 0.5 s and 6.5e-9 rad to 1 s
+/// run of the same files at rtol = atol = 1e-12: slider-crank q1 within 1.5e-11 rad
+/// at 1, 5 and 10 s (its h = 1e-2 under the local tolerance per unit time); five-bar q1 within 7.6e-12 rad to 0.5 s and 6.5e-9 rad to 1 s
 /// (`tests/main_job.rs`; past 2 s the five-bar's free link makes the motion too
 /// sensitive for any reference); five-bar --f32 within 1.6e-5 rad to 0.5 s.
 const PINS: &[Pin<'static>] = &[
