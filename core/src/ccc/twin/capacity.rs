@@ -38,8 +38,8 @@ pub(crate) const GROUP_LINKS: usize = 6;
 /// workspace's applied moments).
 pub(crate) const LOADS: usize = 0;
 
-/// The capacities of the twin's models and workspaces: the lists of [`GROUPS`] groups,
-/// [`LINKS`] links, [`GROUND_POINTS`] ground points and no loads; the rest (a group's
+/// The capacities of the twin's models and workspaces: the lists of `GROUPS` (5) groups,
+/// `LINKS` (8) links, `GROUND_POINTS` (5) ground points and no loads; the rest (a group's
 /// chains, terms, joints and unknowns, a link's points, the bodies and coordinates) at
 /// the core's limits, which are the converter's needs or close to them.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
