@@ -154,3 +154,36 @@ base run, N at a time; example: host-sim/sweeps/mass-motor.toml
   heat-map's metric and the variant that gave it. A variant that fails is a row
   (end = singularity or failed, as in batch.csv), not a failure of the sweep: exit
   status 0 when the files are written.";
+
+/// After the options in `host-sim replay --help`: the logs, the columns, the summary.
+pub const REPLAY: &str = "\
+The bench log (CSV, one sample a row, uniform from t = 0; other columns ignored):
+  t             time, s
+  motor_torque  the motor torque on the crank, N·m, CCW positive
+  load_torque   the brake's set point T_r >= 0, N·m
+  crank_counts  crank encoder, 4096 counts a turn: floor(q1 / (2π/4096)), q1 not wrapped
+  shaft_counts  shaft encoder, 4096 counts a turn, positive in the drive direction, 0 at
+                t = 0
+  A missing column, a value that is not a finite number, a count that is not whole, a
+  t that does not increase or is not uniform (a missing sample) is refused with its
+  line and column named (exit status 2).
+
+The twin steps at the log's sample period (h = the mean interval), each step under the
+sample's motor torque and load (held over the step); --params gives the converter's
+parameters, drive direction and initial state (its motor, load, h and t_end are not
+used). The CSV's columns are run's for a converter (see host-sim help run) and
+  crank_counts twin_crank_counts crank_residual   the log's count, the twin's crank
+                angle by the encoder law (offset to the log's first count), measured -
+                twin
+  shaft_counts twin_shaft_counts shaft_residual   the same for the shaft's angle turned
+                in the drive direction from 0
+  with the event and switch logs next to the CSV (FILE's stem + .events.csv,
+  .switches.csv).
+
+The clutch log (CSV: t, event, from, to; the events and modes in host-sim's names, as
+  the twin's event log): its events are paired in order with the twin's (the twin's
+  start left out). The summary lists every pair with its time difference (twin -
+  machine) and names the first pair that differs (the event, the mode before or
+  after), and the events missing or extra at the end.
+
+--observer (the twin corrected from the encoders) is not built yet and is refused.";

@@ -7,8 +7,8 @@ pub mod help;
 use crate::error::{report_write, UsageError, EXIT_FAILURE, EXIT_OK, EXIT_USAGE, HINT};
 use crate::jobs::{batch, sweep};
 use crate::model::scenarios::Source;
-use crate::options::args::{AnalyzeArgs, BatchArgs, PlotArgs, RunArgs, SweepArgs};
-use crate::options::{BatchOptions, PlotOptions, RunOptions, SweepOptions};
+use crate::options::args::{AnalyzeArgs, BatchArgs, PlotArgs, ReplayArgs, RunArgs, SweepArgs};
+use crate::options::{BatchOptions, PlotOptions, ReplayOptions, RunOptions, SweepOptions};
 use crate::output::pictures;
 use crate::run;
 use clap::error::ErrorKind;
@@ -44,6 +44,10 @@ pub enum CliCommand {
     /// values)
     #[command(after_long_help = help::RUN)]
     Run(RunArgs),
+    /// Replay a bench log on the converter's twin: the encoder residuals and, with the
+    /// machine's clutch log, its events paired with the twin's
+    #[command(after_long_help = help::REPLAY)]
+    Replay(ReplayArgs),
     /// Find and print the structomatic formula, the DOF and each group with its links
     /// and joints
     Analyze(AnalyzeArgs),
@@ -64,6 +68,8 @@ pub enum Command {
     List,
     /// `host-sim run <scenario> [options]`.
     Run(RunOptions),
+    /// `host-sim replay LOG.csv [--params FILE.toml] [--clutch-log FILE] --out FILE`.
+    Replay(ReplayOptions),
     /// `host-sim analyze FILE.toml|<scenario>`.
     Analyze(Source),
     /// `host-sim batch FILE --out-dir DIR [--threads N] [--quiet]`.
@@ -96,6 +102,7 @@ where
     let checked = match cli.command {
         CliCommand::List => Ok(Command::List),
         CliCommand::Run(a) => a.options().map(Command::Run),
+        CliCommand::Replay(a) => a.options().map(Command::Replay),
         CliCommand::Analyze(a) => a.source().map(Command::Analyze),
         CliCommand::Batch(a) => a.options().map(Command::Batch),
         CliCommand::Sweep(a) => a.options().map(Command::Sweep),
@@ -119,6 +126,7 @@ where
             Err(e) => report_write(stderr, "stdout", &e),
         },
         Ok(Command::Run(opts)) => run::execute(&opts, stdout, stderr),
+        Ok(Command::Replay(opts)) => run::replay::execute(&opts, stdout, stderr),
         Ok(Command::Analyze(source)) => match commands::analyze(&source) {
             Ok(text) => match print(stdout, &text) {
                 Ok(()) => EXIT_OK,

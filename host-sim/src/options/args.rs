@@ -6,14 +6,16 @@
 //! and repeated options.
 
 use super::{
-    AnimFormat, BatchOptions, Output, PlotOptions, ProgressStyle, RunOptions, SweepOptions,
-    DEFAULT_FPS, DEFAULT_SLOW, FPS_RANGE, MAX_THREADS, SLOW_RANGE,
+    AnimFormat, BatchOptions, Output, PlotOptions, ProgressStyle, ReplayOptions, RunOptions,
+    SweepOptions, DEFAULT_FPS, DEFAULT_SLOW, FPS_RANGE, MAX_THREADS, SLOW_RANGE,
 };
 use crate::error::{usage_err, Sci, UsageError};
+use crate::model::bench::{BenchLog, ClutchLog};
 use crate::model::runfile::MAX_LOAD;
 use crate::model::scenarios::{ScenarioId, Source};
 use clap::{Args, Parser};
 use std::path::PathBuf;
+use std::sync::Arc;
 
 /// The help's heading of the pictures' options.
 const PICTURES: &str = "Pictures";
@@ -278,6 +280,73 @@ impl PlotArgs {
         Ok(PlotOptions {
             csv: parse_path("plot", &self.csv)?,
             out_dir: parse_path("--out-dir", &self.out_dir)?,
+        })
+    }
+}
+
+/// The arguments of `host-sim replay`.
+#[derive(Args, Clone, Debug, PartialEq)]
+pub struct ReplayArgs {
+    /// The bench log (CSV: t, motor_torque, load_torque, crank_counts, shaft_counts)
+    #[arg(value_name = "LOG.csv")]
+    pub log: String,
+    /// The converter: a converter run file as run takes (its parameters, drive and
+    /// initial state; the log gives the motor, the load, h and t_end); default ccc-s2,
+    /// SPEC's machine
+    #[arg(long, value_name = "PARAMS.toml")]
+    pub params: Option<String>,
+    /// The machine's clutch events (CSV: t, event, from, to), to pair with the twin's
+    #[arg(long, value_name = "CLUTCH.csv")]
+    pub clutch_log: Option<String>,
+    /// The state CSV with the encoder residuals; the event and switch logs go next to it
+    #[arg(long, value_name = "RUN.csv")]
+    pub out: String,
+    /// Correct the twin from the log's encoders (not built yet: refused)
+    #[arg(long)]
+    pub observer: bool,
+    /// No summary
+    #[arg(long)]
+    pub quiet: bool,
+}
+
+impl ReplayArgs {
+    /// The checked options: the logs read and validated, the run file read (it must
+    /// describe the converter).
+    pub fn options(&self) -> Result<ReplayOptions, UsageError> {
+        if self.observer {
+            return Err(usage_err(
+                "--observer: the observer is not built yet (the core has no observer; \
+                 issue 19's item 3): replay runs open-loop, without --observer",
+            ));
+        }
+        let log_path = parse_path("replay", &self.log)?;
+        let log = BenchLog::read(&log_path).map_err(|e| usage_err(format!("replay: {e}")))?;
+        let params = match self.params.as_deref() {
+            None => Source::Builtin(ScenarioId::CccS2),
+            Some(p) => parse_source("--params", p)?,
+        };
+        if !params.is_converter() {
+            return Err(usage_err(format!(
+                "--params: {} describes a mechanism, not the converter (a converter run \
+                 file, as ccc-s2's, expected)",
+                params.name()
+            )));
+        }
+        let clutch = match self.clutch_log.as_deref() {
+            None => None,
+            Some(p) => {
+                let path = parse_path("--clutch-log", p)?;
+                let c = ClutchLog::read(&path)
+                    .map_err(|e| usage_err(format!("--clutch-log: {e}")))?;
+                Some((path, Arc::new(c)))
+            }
+        };
+        Ok(ReplayOptions {
+            log: (log_path, Arc::new(log)),
+            params,
+            clutch,
+            out: parse_path("--out", &self.out)?,
+            quiet: self.quiet,
         })
     }
 }

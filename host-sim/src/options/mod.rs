@@ -1,12 +1,14 @@
-//! What a command is asked to do: the options of `run`, `batch`, `sweep` and `plot`
-//! (parsed from the command line by [`args`]), and the checks every run makes on them
+//! What a command is asked to do: the options of `run`, `replay`, `batch`, `sweep` and
+//! `plot` (parsed from the command line by [`args`]), and the checks every run makes on them
 //! before its first step ([`Steps`]).
 
 pub mod args;
 
 use crate::error::{RunError, Sci, UsageError};
+use crate::model::bench::{BenchLog, ClutchLog};
 use crate::model::scenarios::Source;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 use structomat::Real;
 
 /// Where the CSV goes.
@@ -94,6 +96,22 @@ impl RunOptions {
         }
         o
     }
+}
+
+/// Options of `host-sim replay`: a bench log, read and validated, and the converter to
+/// replay it on.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ReplayOptions {
+    /// The bench log: the path as given and its contents.
+    pub log: (PathBuf, Arc<BenchLog>),
+    /// `--params`: the converter's run file (default: ccc-s2, SPEC's machine).
+    pub params: Source,
+    /// `--clutch-log`: the machine's clutch events, path and contents.
+    pub clutch: Option<(PathBuf, Arc<ClutchLog>)>,
+    /// `--out`: the state CSV (its event and switch logs next to it).
+    pub out: PathBuf,
+    /// No summary.
+    pub quiet: bool,
 }
 
 /// Options of `host-sim plot`.

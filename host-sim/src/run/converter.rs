@@ -219,6 +219,14 @@ impl fmt::Display for CccSummary {
             "scenario  {}: Constantinesco converter, {} ({})",
             self.scenario, self.settings, self.precision
         )?;
+        self.fmt_run(f)
+    }
+}
+
+impl CccSummary {
+    /// The summary's lines after the first (the scenario's): the steps, the logs, the
+    /// events, the energy audit, how the run ended, the wall time.
+    pub fn fmt_run(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         writeln!(
             f,
             "steps     {} of h = {} s, t = 0 .. {} s, {} CSV rows",
@@ -349,7 +357,6 @@ pub fn simulate<T: Real>(
     opts: &RunOptions,
     obs: &mut dyn Observer<T>,
 ) -> Result<CccSummary, RunError> {
-    let precision = precision::<T>();
     let name = opts.scenario.name();
     let settings = settings(opts).ok_or_else(|| {
         RunError::Setup(format!(
@@ -357,8 +364,34 @@ pub fn simulate<T: Real>(
         ))
     })?;
     let (Steps { t_end, n, .. }, h) = Steps::of::<T>(opts)?;
-    let every = opts.every.max(1);
+    let motor = settings
+        .motor
+        .motor::<T>()
+        .map_err(|e| RunError::Setup(format!("cannot set up {name}: motor: {e}")))?;
+    let inputs = Inputs {
+        motor: MotorInput::Law(motor),
+        load: T::c(settings.load),
+        measured: None,
+    };
+    let mut twin = new_twin(name, &settings, h, inputs)?;
+    let drive = Drive {
+        n,
+        every: opts.every.max(1),
+        t_end,
+        quiet: opts.quiet,
+    };
+    let driven = drive.run(&mut twin, &mut |_| inputs, &mut Extra::none(), obs)?;
+    Ok(driven.summary(name, settings, &twin, t_end))
+}
 
+/// The twin of the converter `settings` (its parameters, drive direction, clutches and
+/// initial state) at step `h`, started under `inputs`. Errors name the run `name`.
+pub fn new_twin<T: Real>(
+    name: &str,
+    settings: &CccScenario,
+    h: T,
+    inputs: Inputs<T>,
+) -> Result<Twin<T>, RunError> {
     let conv = &settings.converter;
     let mut params = conv.params::<T>();
     params.drive = settings.drive;
@@ -369,153 +402,264 @@ pub fn simulate<T: Real>(
     ts.swing = T::c(conv.swing_deg.to_radians());
     ts.crank_speed = T::c(conv.crank_speed);
     ts.swing_speed = T::c(conv.swing_speed);
-    let motor = settings
-        .motor
-        .motor::<T>()
-        .map_err(|e| RunError::Setup(format!("cannot set up {name}: motor: {e}")))?;
-    let inputs = Inputs {
-        motor: MotorInput::Law(motor),
-        load: T::c(settings.load),
-        measured: None,
-    };
-    let mut twin = Twin::new(params, ts, inputs)
-        .map_err(|e| RunError::Setup(format!("cannot set up {name}: {e}")))?;
+    Twin::new(params, ts, inputs).map_err(|e| RunError::Setup(format!("cannot set up {name}: {e}")))
+}
 
-    let start = Instant::now();
-    let mut step_wall = Duration::ZERO;
-    let mut counts = [0u64; EVENT_KINDS.len()];
-    let mut first_breakaway = None;
-    let mut switches = 0u64;
-    let mut impacts = 0u64;
+/// A twin's event in the run's order: time, s, the event's name, the modes before and
+/// after.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Logged {
+    /// Time, s.
+    pub time: f64,
+    /// What fired ([`EventKind`]).
+    pub kind: EventKind,
+    /// Mode before.
+    pub from: Mode,
+    /// Mode chosen.
+    pub to: Mode,
+}
 
-    obs.on_start(&Tables {
-        columns: &columns(),
-        logs: &[&EVENT_COLUMNS, &SWITCH_COLUMNS],
-    })?;
-    // The events of the setup (the start mode's choice) and of each step.
-    let mut record = |twin: &Twin<T>, obs: &mut dyn Observer<T>| -> Result<(), RunError> {
-        for e in twin.events() {
-            if let Some(k) = EVENT_KINDS.iter().position(|k| *k == e.kind) {
-                counts[k] += 1;
+/// Columns a run appends to each state row after [`columns`], and the cells of a row:
+/// `cells(twin, row)` appends them for the twin's state.
+pub struct Extra<'a, T: Real> {
+    /// The column names.
+    pub columns: Vec<String>,
+    /// Appends the cells of the twin's present state.
+    pub cells: Box<dyn FnMut(&Twin<T>, &mut Vec<Cell<'static, T>>) + 'a>,
+}
+
+impl<T: Real> Extra<'_, T> {
+    /// No extra columns.
+    pub fn none() -> Self {
+        Extra {
+            columns: Vec::new(),
+            cells: Box::new(|_, _| {}),
+        }
+    }
+}
+
+/// How a converter run steps its twin: `n` steps, a row every `every`-th, to `t_end`
+/// (s, for the progress line), `quiet`: no progress line.
+#[derive(Clone, Copy, Debug)]
+pub struct Drive {
+    /// Steps to take.
+    pub n: u64,
+    /// A state row every N-th step (and at t = 0 and the last state).
+    pub every: u64,
+    /// The run's end, s.
+    pub t_end: f64,
+    /// No progress line.
+    pub quiet: bool,
+}
+
+/// What stepping the twin did ([`Drive::run`]).
+#[derive(Clone, Debug)]
+pub struct Driven {
+    /// Steps completed.
+    pub steps: u64,
+    /// State rows written.
+    pub rows: u64,
+    /// How the run ended.
+    pub end: End,
+    /// Events by kind, in [`EVENT_KINDS`] order.
+    pub counts: [u64; EVENT_KINDS.len()],
+    /// Every event in the run's order (the start's included).
+    pub events: Vec<Logged>,
+    /// The first breakaway (see [`CccSummary::first_breakaway`]).
+    pub first_breakaway: Option<(f64, &'static str)>,
+    /// Coordinate switches.
+    pub switches: u64,
+    /// Events with a plastic impact.
+    pub impacts: u64,
+    /// Wall time of the whole run.
+    pub wall: Duration,
+    /// Wall time inside `Twin::step`.
+    pub step_wall: Duration,
+}
+
+impl Drive {
+    /// Steps `twin` `n` times, step `k + 1` under `inputs(k)`, telling `obs` every
+    /// state, the state rows (each with the `extra` cells) and the log lines (log 0:
+    /// the events, log 1: the coordinate switches); [`Observer::on_end`] also when a
+    /// step fails (the [`End::Stopped`] of the result).
+    pub fn run<T: Real>(
+        &self,
+        twin: &mut Twin<T>,
+        inputs: &mut dyn FnMut(u64) -> Inputs<T>,
+        extra: &mut Extra<'_, T>,
+        obs: &mut dyn Observer<T>,
+    ) -> Result<Driven, RunError> {
+        let start = Instant::now();
+        let mut step_wall = Duration::ZERO;
+        let mut counts = [0u64; EVENT_KINDS.len()];
+        let mut events = Vec::new();
+        let mut first_breakaway = None;
+        let mut switches = 0u64;
+        let mut impacts = 0u64;
+
+        let mut all = columns();
+        all.extend(extra.columns.iter().cloned());
+        obs.on_start(&Tables {
+            columns: &all,
+            logs: &[&EVENT_COLUMNS, &SWITCH_COLUMNS],
+        })?;
+        // The events of the setup (the start mode's choice) and of each step.
+        let mut record = |twin: &Twin<T>, obs: &mut dyn Observer<T>| -> Result<(), RunError> {
+            for e in twin.events() {
+                if let Some(k) = EVENT_KINDS.iter().position(|k| *k == e.kind) {
+                    counts[k] += 1;
+                }
+                if e.impact_loss > T::zero() {
+                    impacts += 1;
+                }
+                let starts_shaft = !e.from.shaft_turning() && e.to.shaft_turning();
+                if starts_shaft && first_breakaway.is_none() {
+                    first_breakaway = Some((e.time.to_f64(), e.kind.name()));
+                }
+                events.push(Logged {
+                    time: e.time.to_f64(),
+                    kind: e.kind,
+                    from: e.from,
+                    to: e.to,
+                });
+                obs.on_event(
+                    0,
+                    &[
+                        Cell::Num(e.time),
+                        Cell::Text(e.kind.name()),
+                        Cell::Text(e.from.name()),
+                        Cell::Text(e.to.name()),
+                        Cell::Num(e.c[0]),
+                        Cell::Num(e.c[1]),
+                        Cell::Num(e.impact_loss),
+                        Cell::Num(e.mismatch),
+                    ],
+                )?;
             }
-            if e.impact_loss > T::zero() {
-                impacts += 1;
+            for s in twin.switches() {
+                switches += 1;
+                obs.on_event(
+                    1,
+                    &[
+                        Cell::Num(s.time),
+                        Cell::Text(s.mode.name()),
+                        Cell::Text(s.from.name()),
+                        Cell::Text(s.to.name()),
+                        Cell::Num(s.conditioning[0]),
+                        Cell::Num(s.conditioning[1]),
+                    ],
+                )?;
             }
-            let starts_shaft = !e.from.shaft_turning() && e.to.shaft_turning();
-            if starts_shaft && first_breakaway.is_none() {
-                first_breakaway = Some((e.time.to_f64(), e.kind.name()));
+            Ok(())
+        };
+        let mut cells = Vec::new();
+        let mut write = |twin: &Twin<T>, obs: &mut dyn Observer<T>| {
+            row(twin, &mut cells);
+            (extra.cells)(twin, &mut cells);
+            obs.on_row(&cells)
+        };
+        record(twin, obs)?;
+        write(twin, obs)?;
+        obs.on_state(State::Converter(twin));
+        let mut rows = 1u64;
+        let mut written = 0u64;
+        let mut steps = 0u64;
+        let mut end = End::Completed;
+        let mut progress = Progress::new(self.t_end, self.quiet);
+        while steps < self.n {
+            if interrupt::requested() {
+                end = End::Interrupted;
+                break;
             }
-            obs.on_event(
-                0,
-                &[
-                    Cell::Num(e.time),
-                    Cell::Text(e.kind.name()),
-                    Cell::Text(e.from.name()),
-                    Cell::Text(e.to.name()),
-                    Cell::Num(e.c[0]),
-                    Cell::Num(e.c[1]),
-                    Cell::Num(e.impact_loss),
-                    Cell::Num(e.mismatch),
-                ],
-            )?;
+            progress.tick(twin.time().to_f64());
+            let now = inputs(steps);
+            let t0 = Instant::now();
+            let r = twin.step(&now);
+            step_wall += t0.elapsed();
+            if let Err(error) = r {
+                // An end at a singularity of the mechanism (S1's diode rods in line, or
+                // S2's without a load to hold the shaft) is where the machine stops, in
+                // either mode: one exit status for it in run, batch and sweep.
+                let expected = error.at_singularity();
+                end = End::Stopped { error, expected };
+                break;
+            }
+            steps += 1;
+            record(twin, obs)?;
+            obs.on_state(State::Converter(twin));
+            if steps % self.every == 0 || steps == self.n {
+                write(twin, obs)?;
+                rows += 1;
+                written = steps;
+            }
         }
-        for s in twin.switches() {
-            switches += 1;
-            obs.on_event(
-                1,
-                &[
-                    Cell::Num(s.time),
-                    Cell::Text(s.mode.name()),
-                    Cell::Text(s.from.name()),
-                    Cell::Text(s.to.name()),
-                    Cell::Num(s.conditioning[0]),
-                    Cell::Num(s.conditioning[1]),
-                ],
-            )?;
-        }
-        Ok(())
-    };
-    let mut cells = Vec::new();
-    let mut write = |twin: &Twin<T>, obs: &mut dyn Observer<T>| {
-        row(twin, &mut cells);
-        obs.on_row(&cells)
-    };
-    record(&twin, obs)?;
-    write(&twin, obs)?;
-    obs.on_state(State::Converter(&twin));
-    let mut rows = 1u64;
-    let mut written = 0u64;
-    let mut steps = 0u64;
-    let mut end = End::Completed;
-    let mut progress = Progress::new(t_end, opts.quiet);
-    while steps < n {
-        if interrupt::requested() {
-            end = End::Interrupted;
-            break;
-        }
-        progress.tick(twin.time().to_f64());
-        let t0 = Instant::now();
-        let r = twin.step(&inputs);
-        step_wall += t0.elapsed();
-        if let Err(error) = r {
-            // An end at a singularity of the mechanism (S1's diode rods in line, or S2's
-            // without a load to hold the shaft) is where the machine stops, in either
-            // mode: one exit status for it in run, batch and sweep.
-            let expected = error.at_singularity();
-            end = End::Stopped { error, expected };
-            break;
-        }
-        steps += 1;
-        record(&twin, obs)?;
-        obs.on_state(State::Converter(&twin));
-        if steps % every == 0 || steps == n {
-            write(&twin, obs)?;
+        if written != steps {
+            // The last good state before a failed step.
+            write(twin, obs)?;
             rows += 1;
-            written = steps;
+        }
+        progress.finish();
+        obs.on_end()?;
+        Ok(Driven {
+            steps,
+            rows,
+            end,
+            counts,
+            events,
+            first_breakaway,
+            switches,
+            impacts,
+            wall: start.elapsed(),
+            step_wall,
+        })
+    }
+}
+
+impl Driven {
+    /// The summary of the run `scenario` of `settings` that left `twin` (to `t_end`,
+    /// s); its `logs` left `None`.
+    pub fn summary<T: Real>(
+        self,
+        scenario: &str,
+        settings: CccScenario,
+        twin: &Twin<T>,
+        t_end: f64,
+    ) -> CccSummary {
+        let a = twin.audit();
+        CccSummary {
+            scenario: scenario.to_string(),
+            settings,
+            precision: precision::<T>(),
+            h: twin.h().to_f64(),
+            t_end,
+            steps: self.steps,
+            time: twin.time().to_f64(),
+            rows: self.rows,
+            logs: None,
+            events: EVENT_KINDS
+                .iter()
+                .zip(self.counts)
+                .map(|(k, n)| (k.name(), n))
+                .collect(),
+            first_breakaway: self.first_breakaway,
+            switches: self.switches,
+            impacts: self.impacts,
+            audit: Audit {
+                motor_work: a.motor_work.to_f64(),
+                load_work: a.load_work.to_f64(),
+                impact_loss: a.impact_loss.to_f64(),
+                kinetic: a.kinetic.to_f64(),
+                potential: a.potential.to_f64(),
+                initial: a.initial.to_f64(),
+            },
+            mode: twin.mode(),
+            coords: twin.coordinates(),
+            shaft_angle: twin.shaft_angle().to_f64(),
+            end: self.end,
+            wall: self.wall,
+            step_wall: self.step_wall,
         }
     }
-    if written != steps {
-        // The last good state before a failed step.
-        write(&twin, obs)?;
-        rows += 1;
-    }
-    progress.finish();
-    obs.on_end()?;
-    let wall = start.elapsed();
-    let a = twin.audit();
-    Ok(CccSummary {
-        scenario: opts.scenario.name().to_string(),
-        settings,
-        precision,
-        h: h.to_f64(),
-        t_end,
-        steps,
-        time: twin.time().to_f64(),
-        rows,
-        logs: None,
-        events: EVENT_KINDS
-            .iter()
-            .zip(counts)
-            .map(|(k, n)| (k.name(), n))
-            .collect(),
-        first_breakaway,
-        switches,
-        impacts,
-        audit: Audit {
-            motor_work: a.motor_work.to_f64(),
-            load_work: a.load_work.to_f64(),
-            impact_loss: a.impact_loss.to_f64(),
-            kinetic: a.kinetic.to_f64(),
-            potential: a.potential.to_f64(),
-            initial: a.initial.to_f64(),
-        },
-        mode: twin.mode(),
-        coords: twin.coordinates(),
-        shaft_angle: twin.shaft_angle().to_f64(),
-        end,
-        wall,
-        step_wall,
-    })
 }
 
 /// The state row of `twin` into `cells` (see [`columns`]): cells past the mode's DOF

@@ -3,13 +3,14 @@
 //! rows and log lines to an [`Observer`]. [`simulate`] picks the runner of a run's
 //! source, [`dispatch`] its precision and gathers the observers (the CSV writer, the
 //! pictures' recorder), and [`execute`] is `host-sim run`: files, pictures, summary,
-//! exit code.
+//! exit code. [`replay`] is `host-sim replay`: a bench log on the converter's twin.
 
 pub mod columns;
 pub mod converter;
 pub mod interrupt;
 pub mod mechanism;
 pub mod progress;
+pub mod replay;
 pub mod switching;
 
 use crate::error::{report_run_error, temp_path, RunError, EXIT_INTERRUPTED, EXIT_OK};
@@ -94,10 +95,7 @@ pub fn dispatch(
 }
 
 /// Runs `opts` with its CSV to the file `path` and, for the converter, the logs next
-/// to it ([`log_paths`]). Each file is written to its [`temp_path`] and renamed into
-/// place when the run is over (completed, failed at a step or interrupted: its rows up
-/// to there are whole), so that a crash never leaves half a file; a run that fails
-/// before its first row (its set-up) leaves none.
+/// to it ([`log_paths`]), through [`to_files`].
 pub fn run_to_file(
     opts: &RunOptions,
     path: &Path,
@@ -108,13 +106,32 @@ pub fn run_to_file(
         let (events, switches) = log_paths(path);
         targets.extend([events, switches]);
     }
+    let mut report = to_files(&targets, |csv| dispatch(opts, csv, rec))?;
+    if let (Report::Converter(s), [_, events, switches]) = (&mut report, &targets[..]) {
+        s.logs = Some((
+            events.display().to_string(),
+            switches.display().to_string(),
+        ));
+    }
+    Ok(report)
+}
+
+/// Runs `run` with a CSV writer whose state table goes to the first of `targets` and
+/// its logs to the others. Each file is written to its [`temp_path`] and renamed into
+/// place when the run is over (completed, failed at a step or interrupted: its rows up
+/// to there are whole), so that a crash never leaves half a file; a run that fails
+/// before its first row (its set-up) leaves none.
+pub fn to_files<R>(
+    targets: &[PathBuf],
+    run: impl FnOnce(CsvWriter<'_>) -> Result<R, RunError>,
+) -> Result<R, RunError> {
     let temps: Vec<_> = targets.iter().map(|p| temp_path(p)).collect();
-    let result = write_temps(opts, &targets, &temps, rec);
+    let result = write_temps(targets, &temps, run);
     let keep = matches!(
         result,
         Ok(_) | Err(RunError::Step { .. } | RunError::Integrator { .. })
     );
-    for (tmp, target) in temps.iter().zip(&targets) {
+    for (tmp, target) in temps.iter().zip(targets) {
         if tmp == target {
             // A device or a pipe, written in place.
         } else if keep {
@@ -129,14 +146,13 @@ pub fn run_to_file(
     result
 }
 
-/// [`run_to_file`]'s run: the CSV (and a converter's logs) to the files `temps`, in
-/// errors and the summary named by `targets`.
-fn write_temps(
-    opts: &RunOptions,
-    targets: &[std::path::PathBuf],
-    temps: &[std::path::PathBuf],
-    rec: Option<&mut Recorder>,
-) -> Result<Report, RunError> {
+/// [`to_files`]'s run: its CSV writer on the files `temps`, named in errors by
+/// `targets`.
+fn write_temps<R>(
+    targets: &[PathBuf],
+    temps: &[PathBuf],
+    run: impl FnOnce(CsvWriter<'_>) -> Result<R, RunError>,
+) -> Result<R, RunError> {
     let names: Vec<String> = targets.iter().map(|p| p.display().to_string()).collect();
     let mut files = Vec::new();
     for (tmp, name) in temps.iter().zip(&names) {
@@ -153,11 +169,7 @@ fn write_temps(
     let Some(state) = sinks.next() else {
         return Err(RunError::Setup("no output file".to_string()));
     };
-    let mut report = dispatch(opts, CsvWriter::new(state, sinks.collect()), rec)?;
-    if let (Report::Converter(s), [_, events, switches]) = (&mut report, &names[..]) {
-        s.logs = Some((events.clone(), switches.clone()));
-    }
-    Ok(report)
+    run(CsvWriter::new(state, sinks.collect()))
 }
 
 /// Runs `opts` writing nothing (the CSV goes to [`io::sink`]): the report only, as a
@@ -179,9 +191,6 @@ pub fn refuse_inputs(opts: &RunOptions) -> Result<(), RunError> {
     let Source::File { path: input, .. } = &opts.scenario else {
         return Ok(());
     };
-    let Ok(input) = Path::new(input).canonicalize() else {
-        return Ok(());
-    };
     let mut outputs: Vec<PathBuf> = opts.animate.clone();
     outputs.extend(opts.plot.clone());
     if let Output::File(out) = &opts.out {
@@ -191,17 +200,33 @@ pub fn refuse_inputs(opts: &RunOptions) -> Result<(), RunError> {
             outputs.extend([events, switches]);
         }
     }
-    match outputs
-        .iter()
-        .find(|p| p.canonicalize().is_ok_and(|p| p == input))
-    {
-        Some(p) => Err(RunError::Usage(crate::error::usage_err(format!(
+    match overwritten(&[Path::new(input)], &outputs) {
+        Some((p, _)) => Err(RunError::Usage(crate::error::usage_err(format!(
             "the output {} is the run file itself: the run would overwrite its model; \
              name another file",
             p.display()
         )))),
         None => Ok(()),
     }
+}
+
+/// The first of `outputs` that is the same file as one of `inputs` (both exist and
+/// canonicalize to the same path), and that input.
+pub fn overwritten<'a, 'b>(
+    inputs: &[&'b Path],
+    outputs: &'a [PathBuf],
+) -> Option<(&'a PathBuf, &'b Path)> {
+    let inputs: Vec<_> = inputs
+        .iter()
+        .filter_map(|p| p.canonicalize().ok().map(|c| (c, *p)))
+        .collect();
+    outputs.iter().find_map(|o| {
+        let o_canon = o.canonicalize().ok()?;
+        inputs
+            .iter()
+            .find(|(c, _)| *c == o_canon)
+            .map(|(_, input)| (o, *input))
+    })
 }
 
 /// Runs `host-sim run` with `opts`: the CSV to the file (with a converter's logs next
