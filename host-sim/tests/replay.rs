@@ -145,13 +145,19 @@ fn bench1_replays_as_the_issue_states() {
     let first = &m.pairs[0];
     let (bench, twin) = (first.machine.unwrap(), first.twin.unwrap());
     assert_eq!(bench.kind.name(), "release8");
-    assert!((bench.time - 0.02687).abs() < 5e-6, "issue: bench 0.02687 s");
+    assert!(
+        (bench.time - 0.02687).abs() < 5e-6,
+        "issue: bench 0.02687 s"
+    );
     // Issue: twin 0.02876 s, S2's twin under a constant 12 N·m. The replay holds the
     // log's measured torque (sensor noise of about 0.05 N·m) over each step: the
     // lever's transmitted torque, whose zero is the release, follows the motor torque
     // at once, so the release moves by 0.07 ms. The constant-torque replay below
     // gives S2's 0.02876 s.
-    assert!((twin.time - 0.02876).abs() < 1e-4, "issue: twin 0.02876 s: {m}");
+    assert!(
+        (twin.time - 0.02876).abs() < 1e-4,
+        "issue: twin 0.02876 s: {m}"
+    );
     assert!(first.same());
     // Issue: "the sequences part at 0.33 s: the machine's lever 8 catches into I8
     // where the twin's turns the shaft (A8)", 29 ms apart.
@@ -170,7 +176,10 @@ fn bench1_replays_as_the_issue_states() {
     let last_twin = m.pairs.iter().filter_map(|p| p.twin).last().unwrap();
     assert_eq!((last_bench.to.name(), last_twin.to.name()), ("jam", "jam"));
     assert!((last_bench.time - 0.8367).abs() < 5e-5, "issue: 0.8367 s");
-    assert!((last_twin.time - 0.8185).abs() < 1e-4, "issue: 0.8185 s: {m}");
+    assert!(
+        (last_twin.time - 0.8185).abs() < 1e-4,
+        "issue: 0.8185 s: {m}"
+    );
     assert!(s.crank.samples == 1001 && s.crank.rms() > 1.0);
 
     // The summary names the first mismatch.
@@ -184,10 +193,15 @@ fn bench1_replays_as_the_issue_states() {
     ]);
     assert_eq!(code, 0, "{err}");
     assert!(
-        text.contains("the first mismatch is pair 14 (t = 0.330300 s): mode after: machine I8, twin A8"),
+        text.contains(
+            "the first mismatch is pair 14 (t = 0.330300 s): mode after: machine I8, twin A8"
+        ),
         "{text}"
     );
-    assert!(text.contains("crank     residual (measured - twin) RMS"), "{text}");
+    assert!(
+        text.contains("crank     residual (measured - twin) RMS"),
+        "{text}"
+    );
 }
 
 /// bench1 with its motor torque replaced by S2's constant 12 N·m replays to S2: the
@@ -291,10 +305,16 @@ fn bad_logs_are_named_errors() {
         &out,
     ]);
     assert_eq!(code, 2);
-    assert!(err.contains("--clutch-log: ") && err.contains("column event: missing"), "{err}");
+    assert!(
+        err.contains("--clutch-log: ") && err.contains("column event: missing"),
+        "{err}"
+    );
     let (code, _, err) = run(&["replay", &data("bench1.csv"), "--observer", "--out", &out]);
     assert_eq!(code, 2);
-    assert!(err.contains("--observer: the observer is not built yet"), "{err}");
+    assert!(
+        err.contains("--observer: the observer is not built yet"),
+        "{err}"
+    );
     let (code, _, err) = run(&[
         "replay",
         &data("bench1.csv"),
@@ -304,7 +324,10 @@ fn bad_logs_are_named_errors() {
         &out,
     ]);
     assert_eq!(code, 2);
-    assert!(err.contains("--params: five-bar describes a mechanism"), "{err}");
+    assert!(
+        err.contains("--params: five-bar describes a mechanism"),
+        "{err}"
+    );
     assert!(!std::path::Path::new(&out).exists());
     // The output may not be an input.
     let copy = dir.join("log.csv");

@@ -570,7 +570,10 @@ mod tests {
         .unwrap();
         assert_eq!(log.events.len(), 2);
         assert_eq!(log.events[1].kind, EventKind::Catch(8));
-        assert_eq!((log.events[1].from, log.events[1].to), (Mode::I6, Mode::Jam));
+        assert_eq!(
+            (log.events[1].from, log.events[1].to),
+            (Mode::I6, Mode::Jam)
+        );
         for (text, want) in [
             (
                 "t,event,from\n",

@@ -336,8 +336,8 @@ impl ReplayArgs {
             None => None,
             Some(p) => {
                 let path = parse_path("--clutch-log", p)?;
-                let c = ClutchLog::read(&path)
-                    .map_err(|e| usage_err(format!("--clutch-log: {e}")))?;
+                let c =
+                    ClutchLog::read(&path).map_err(|e| usage_err(format!("--clutch-log: {e}")))?;
                 Some((path, Arc::new(c)))
             }
         };

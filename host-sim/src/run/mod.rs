@@ -108,10 +108,7 @@ pub fn run_to_file(
     }
     let mut report = to_files(&targets, |csv| dispatch(opts, csv, rec))?;
     if let (Report::Converter(s), [_, events, switches]) = (&mut report, &targets[..]) {
-        s.logs = Some((
-            events.display().to_string(),
-            switches.display().to_string(),
-        ));
+        s.logs = Some((events.display().to_string(), switches.display().to_string()));
     }
     Ok(report)
 }

@@ -266,7 +266,11 @@ impl fmt::Display for Matching {
             } else {
                 format!("  {}", p.difference())
             };
-            writeln!(f, "          {:>4}  {machine:<32}  {twin:<32}  {dt}{note}", k + 1)?;
+            writeln!(
+                f,
+                "          {:>4}  {machine:<32}  {twin:<32}  {dt}{note}",
+                k + 1
+            )?;
         }
         Ok(())
     }
@@ -369,9 +373,7 @@ pub fn simulate<T: Real>(
             let time = twin.time().to_f64();
             crank.add(mc - tc, time);
             shaft.add(ms - ts, time);
-            cells.extend(
-                [mc, tc, mc - tc, ms, ts, ms - ts].map(|c| Cell::Num(T::c(c as f64))),
-            );
+            cells.extend([mc, tc, mc - tc, ms, ts, ms - ts].map(|c| Cell::Num(T::c(c as f64))));
         }),
     };
     let drive = Drive {
