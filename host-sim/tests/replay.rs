@@ -172,8 +172,13 @@ fn bench1_replays_as_the_issue_states() {
     // Issue: "the machine makes 21 events and jams at 0.8367 s, the twin 23 and jams
     // at 0.8185 s".
     assert_eq!(m.counts(), (21, 23), "{m}");
-    let last_bench = m.pairs.iter().filter_map(|p| p.machine).last().unwrap();
-    let last_twin = m.pairs.iter().filter_map(|p| p.twin).last().unwrap();
+    let last_bench = m
+        .pairs
+        .iter()
+        .filter_map(|p| p.machine)
+        .next_back()
+        .unwrap();
+    let last_twin = m.pairs.iter().filter_map(|p| p.twin).next_back().unwrap();
     assert_eq!((last_bench.to.name(), last_twin.to.name()), ("jam", "jam"));
     assert!((last_bench.time - 0.8367).abs() < 5e-5, "issue: 0.8367 s");
     assert!(

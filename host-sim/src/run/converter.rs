@@ -419,13 +419,16 @@ pub struct Logged {
     pub to: Mode,
 }
 
+/// What appends a run's own cells to a state row, for the twin's present state.
+pub type ExtraCells<'a, T> = dyn FnMut(&Twin<T>, &mut Vec<Cell<'static, T>>) + 'a;
+
 /// Columns a run appends to each state row after [`columns`], and the cells of a row:
 /// `cells(twin, row)` appends them for the twin's state.
 pub struct Extra<'a, T: Real> {
     /// The column names.
     pub columns: Vec<String>,
     /// Appends the cells of the twin's present state.
-    pub cells: Box<dyn FnMut(&Twin<T>, &mut Vec<Cell<'static, T>>) + 'a>,
+    pub cells: Box<ExtraCells<'a, T>>,
 }
 
 impl<T: Real> Extra<'_, T> {
