@@ -39,7 +39,8 @@ pub const JITTER: f64 = 0.01;
 /// The most samples a log may have (the most steps a run may take).
 pub const MAX_SAMPLES: usize = 100_000_000;
 
-/// The event names a clutch log may give: the twin's event kinds but the start.
+/// The event names a clutch log may give: the changes of the diode's state, the twin's
+/// event kinds but the start.
 pub const CLUTCH_EVENTS: [EventKind; 7] = [
     EventKind::Inputs,
     EventKind::Catch(6),
@@ -132,9 +133,7 @@ impl BenchLog {
 
     /// Reads and validates the bench log at `path`.
     pub fn read(path: &Path) -> Result<BenchLog, LogError> {
-        let origin = path.display().to_string();
-        let text = read_text(path, &origin)?;
-        BenchLog::parse(&text, &origin)
+        read_with(path, BenchLog::parse)
     }
 
     /// Parses and validates the text of a bench log named `origin`.
@@ -273,9 +272,7 @@ pub struct ClutchLog {
 impl ClutchLog {
     /// Reads and validates the clutch log at `path`.
     pub fn read(path: &Path) -> Result<ClutchLog, LogError> {
-        let origin = path.display().to_string();
-        let text = read_text(path, &origin)?;
-        ClutchLog::parse(&text, &origin)
+        read_with(path, ClutchLog::parse)
     }
 
     /// Parses and validates the text of a clutch log named `origin`.
@@ -325,13 +322,27 @@ impl ClutchLog {
     }
 }
 
-fn read_text(path: &Path, origin: &str) -> Result<String, LogError> {
-    std::fs::read_to_string(path).map_err(|e| LogError {
-        origin: origin.to_string(),
+/// The file at `path` read and given to `parse` with its path as its name.
+fn read_with<L>(path: &Path, parse: fn(&str, &str) -> Result<L, LogError>) -> Result<L, LogError> {
+    let origin = path.display().to_string();
+    let text = std::fs::read_to_string(path).map_err(|e| LogError {
+        origin: origin.clone(),
         line: None,
         column: None,
         message: format!("cannot read: {e}"),
-    })
+    })?;
+    parse(&text, &origin)
+}
+
+/// A CSV reader of `text` as host-sim reads its CSVs: no header of its own (the
+/// caller reads the first record as one), cells trimmed, rows of any width (the caller
+/// names the line of a row of another width).
+pub fn csv_reader(text: &str) -> ::csv::Reader<&[u8]> {
+    ::csv::ReaderBuilder::new()
+        .has_headers(false)
+        .trim(::csv::Trim::All)
+        .flexible(true)
+        .from_reader(text.as_bytes())
 }
 
 /// A CSV's cells of the wanted columns: each data row's line and its cells in the
@@ -350,11 +361,7 @@ impl Cells {
             column: column.map(str::to_string),
             message,
         };
-        let mut reader = ::csv::ReaderBuilder::new()
-            .has_headers(false)
-            .trim(::csv::Trim::All)
-            .flexible(true)
-            .from_reader(text.as_bytes());
+        let mut reader = csv_reader(text);
         let mut records = reader.records();
         let header = match records.next() {
             Some(r) => r.map_err(|e| err(Some(1), None, e.to_string()))?,

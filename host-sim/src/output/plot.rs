@@ -10,6 +10,7 @@
 use super::{Cell, Observer, Tables};
 use crate::draw::{panels, Color, Figure, Plot, Series, PALETTE};
 use crate::error::RunError;
+use crate::model::bench::csv_reader;
 use std::path::{Path, PathBuf};
 use structomat::ccc::Mode;
 use structomat::Real;
@@ -59,11 +60,7 @@ impl Table {
     /// Reads a CSV written by `host-sim run` (the `csv` crate's reader): a header,
     /// then rows of the same number of cells. Errors name the line.
     pub fn from_csv(text: &str) -> Result<Table, String> {
-        let mut reader = ::csv::ReaderBuilder::new()
-            .has_headers(false)
-            .trim(::csv::Trim::All)
-            .flexible(true)
-            .from_reader(text.as_bytes());
+        let mut reader = csv_reader(text);
         let mut records = reader.records();
         let line = |r: &::csv::StringRecord| r.position().map_or(0, |p| p.line());
         let header = match records.next() {

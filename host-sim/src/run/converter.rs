@@ -12,6 +12,7 @@
 use super::interrupt;
 use super::progress::Progress;
 use crate::error::{Fig, RunError, EXIT_FAILURE, EXIT_INTERRUPTED, EXIT_OK};
+use crate::model::bench::CLUTCH_EVENTS;
 use crate::model::runfile::MotorSpec;
 use crate::model::scenarios::CccScenario;
 use crate::options::{precision, RunOptions, Steps};
@@ -25,17 +26,17 @@ use structomat::ccc::{
 };
 use structomat::Real;
 
-/// The event kinds, in the order of the summary's counts.
-pub const EVENT_KINDS: [EventKind; 8] = [
-    EventKind::Start,
-    EventKind::Inputs,
-    EventKind::Catch(6),
-    EventKind::Catch(8),
-    EventKind::Release(6),
-    EventKind::Release(8),
-    EventKind::Breakaway,
-    EventKind::ShaftStop,
-];
+/// The event kinds, in the order of the summary's counts: the start, then the
+/// changes of the diode's state that a clutch log names ([`CLUTCH_EVENTS`]).
+pub const EVENT_KINDS: [EventKind; CLUTCH_EVENTS.len() + 1] = {
+    let mut all = [EventKind::Start; CLUTCH_EVENTS.len() + 1];
+    let mut k = 0;
+    while k < CLUTCH_EVENTS.len() {
+        all[k + 1] = CLUTCH_EVENTS[k];
+        k += 1;
+    }
+    all
+};
 
 /// Header of the event log.
 pub const EVENT_COLUMNS: [&str; 8] = [
