@@ -6,7 +6,9 @@
 //! `host-sim run <scenario>|FILE.toml [options]` (CSV of the state, the applied and
 //! kinetostatic driving torques and the joint reactions, plus a summary; for the
 //! converter, SPEC 3, also the logs of the mode changes and of the coordinate
-//! switches), `host-sim analyze`, `host-sim batch`, `host-sim sweep`, `host-sim plot`,
+//! switches), `host-sim replay LOG.csv` (a bench log replayed open-loop on the
+//! converter's twin: encoder residuals, the machine's clutch events paired with the
+//! twin's), `host-sim analyze`, `host-sim batch`, `host-sim sweep`, `host-sim plot`,
 //! `host-sim help [COMMAND]` (each command's options and reference).
 //!
 //! The output is deterministic: the same command writes the same bytes on every run,
