@@ -319,9 +319,7 @@ impl<T: Real> Twin<T> {
     /// reproduces the workspace, guards, clutch torques, links, reactions and audit the
     /// twin holds. S2 rests from its jam at 0.8185 s to its end: 18 % of its steps.
     fn repeats_at_rest(&self, inputs: &Inputs<T>) -> bool {
-        if !self.at_rest
-            || self.slots.cur().mode != Mode::Jam
-            || !same_inputs(&self.inputs, inputs)
+        if !self.at_rest || self.slots.cur().mode != Mode::Jam || !same_inputs(&self.inputs, inputs)
         {
             return false;
         }
@@ -682,3 +680,6 @@ fn shaft_accel<T: Real>(mode: Mode, links: &[LinkState<T>; 9]) -> T {
 fn same_bits<T: Real>(a: T, b: T) -> bool {
     a.to_f64().to_bits() == b.to_f64().to_bits()
 }
+
+#[cfg(test)]
+mod tests;
