@@ -70,6 +70,7 @@ impl<T: Real> Twin<T> {
             switches: heapless::Vec::new(),
             candidates: heapless::Vec::new(),
             torque_source: TorqueSource::Kinetostatics,
+            at_rest: false,
         };
         twin.start_at(&q, &pose, &inputs)?;
         Ok(twin)
@@ -156,6 +157,7 @@ impl<T: Real> Twin<T> {
             addr_of_mut!((*p).switches).write(heapless::Vec::new());
             addr_of_mut!((*p).candidates).write(heapless::Vec::new());
             addr_of_mut!((*p).torque_source).write(TorqueSource::Kinetostatics);
+            addr_of_mut!((*p).at_rest).write(false);
             place.assume_init_mut()
         }
     }
@@ -254,5 +256,6 @@ fn fields_of<T: Real>(t: &Twin<T>) {
         switches: _,
         candidates: _,
         torque_source: _,
+        at_rest: _,
     } = t;
 }

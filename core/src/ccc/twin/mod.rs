@@ -51,6 +51,7 @@ use super::mode::{Clutch, Mode};
 use super::params::CccParams;
 use crate::error::StepError;
 use crate::integrator::Dp5;
+use crate::motor::Motor;
 use crate::scalar::{Real, Vec2};
 use crate::workspace::WarmStart;
 use evaluate::{Stage, TorqueSource, Torques};
@@ -203,6 +204,10 @@ pub struct Twin<T: Real> {
     /// Where `c` came from: a state is committed only with the current slot's own
     /// kinetostatics.
     torque_source: TorqueSource,
+    /// The last step ended at rest (jam) through [`Twin::advance`]'s rest branch: the
+    /// current slot's workspace, guards and clutch torques are the full evaluation of
+    /// the committed state under the last step's inputs ([`Twin::repeats_at_rest`]).
+    at_rest: bool,
 }
 
 /// The working state of a step, committed only when the whole step succeeds.
@@ -225,6 +230,9 @@ struct Work<T: Real> {
     /// ([`Twin::balance_within`]), and fail the attempt there if it already breaks by
     /// [`EVENT_AUDIT_MARGIN`] times the tolerance.
     audit_at_events: bool,
+    /// The step ended in the rest branch of [`Twin::advance`] (its last evaluation the
+    /// full one of the state at rest, at the step's end).
+    at_rest: bool,
     /// The energy check that failed the attempt: its residual's jump over its
     /// tolerance (over 1), from which [`rung_may_pass`] predicts the next rung.
     excess: Option<T>,
@@ -253,6 +261,11 @@ impl<T: Real> Twin<T> {
     /// coordinate switches, the candidates of the last mode choice).
     pub fn step(&mut self, inputs: &Inputs<T>) -> Result<(), TwinStepError> {
         check_inputs(inputs, self.t)?;
+        if self.repeats_at_rest(inputs) {
+            return self.step_at_rest(inputs);
+        }
+        // Set again by a step committed at rest.
+        self.at_rest = false;
         let changed = !same_inputs(&self.inputs, inputs);
         let saved = self.slots.cur().ws.warm_start();
         // The last good step's log: an attempt rewrites it. Usually empty (events and
@@ -297,6 +310,49 @@ impl<T: Real> Twin<T> {
         Err(failure)
     }
 
+    /// Whether a step under `inputs` can only repeat the last one at rest: that step
+    /// ended in the jam through [`Twin::advance`]'s rest branch, and the inputs are the
+    /// same and give the crank the same motor torque, bit for bit, at any time (no user
+    /// law of time). The rest branch's evaluation at the new step's end is then a
+    /// function of the same state and torques (the jam's model is dyads in closed form
+    /// with no degree of freedom: no time, no Newton warm start enters it), so it
+    /// reproduces the workspace, guards, clutch torques, links, reactions and audit the
+    /// twin holds. S2 rests from its jam at 0.8185 s to its end: 18 % of its steps.
+    fn repeats_at_rest(&self, inputs: &Inputs<T>) -> bool {
+        if !self.at_rest || self.slots.cur().mode != Mode::Jam || !same_inputs(&self.inputs, inputs)
+        {
+            return false;
+        }
+        let of_time = |m: &MotorInput<T>| matches!(m, MotorInput::Law(Motor::User(_)));
+        if of_time(&self.inputs.motor) || of_time(&inputs.motor) {
+            return false;
+        }
+        // Without a user law the torque is a function of the crank's speed alone.
+        let omega = self.links[1].omega;
+        let zero = T::zero();
+        same_bits(
+            self.inputs.motor.torque(zero, zero, omega),
+            inputs.motor.torque(zero, zero, omega),
+        )
+    }
+
+    /// The step [`Twin::repeats_at_rest`] allows: what a full step at rest commits
+    /// (the time `(n + 1)·h`, the step count, no event or switch, the inputs; the
+    /// state, outputs and audit as they are), without its evaluation.
+    fn step_at_rest(&mut self, inputs: &Inputs<T>) -> Result<(), TwinStepError> {
+        let t_end = self.step_end()?;
+        self.events.clear();
+        self.switches.clear();
+        self.t = t_end;
+        self.steps += 1;
+        // The full step adds the rest's shaft turns, 0 + 0, and no impact loss to the
+        // audit's (the same bits, a -0 included).
+        self.shaft_angle += T::zero() + T::zero();
+        self.audit.impact_loss += T::zero();
+        self.inputs = *inputs;
+        Ok(())
+    }
+
     /// One attempt at the step in at most `substeps` DP5 steps between events,
     /// committed if it succeeds; on an error the twin is back at its last good state
     /// (the current slot's warm starts `saved`). `changed`: the inputs differ from the
@@ -330,6 +386,7 @@ impl<T: Real> Twin<T> {
                 self.steps += 1;
                 self.commit(&w, audit, links);
                 self.inputs = *inputs;
+                self.at_rest = w.at_rest;
                 Ok(())
             }
             Err(e) => {
@@ -350,6 +407,7 @@ impl<T: Real> Twin<T> {
             shaft_turn: T::zero(),
             segment_levers: [self.links[6].theta, self.links[8].theta],
             audit_at_events: false,
+            at_rest: false,
             excess: None,
         }
     }
@@ -375,6 +433,7 @@ impl<T: Real> Twin<T> {
                 // At rest: nothing moves until the inputs make another mode consistent.
                 w.t = t_end;
                 self.restart_at(w, inputs)?;
+                w.at_rest = true;
                 break;
             }
             let t0 = w.t;
@@ -621,3 +680,6 @@ fn shaft_accel<T: Real>(mode: Mode, links: &[LinkState<T>; 9]) -> T {
 fn same_bits<T: Real>(a: T, b: T) -> bool {
     a.to_f64().to_bits() == b.to_f64().to_bits()
 }
+
+#[cfg(test)]
+mod tests;
