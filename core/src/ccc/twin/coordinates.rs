@@ -43,7 +43,7 @@ pub(super) fn best_slot<T: Real>(
 ) -> Result<[T; 2], TwinStepError> {
     // (conditioning, coordinates) of the best so far, which `slot` holds.
     let mut best: Option<(T, [T; 2])> = None;
-    let failures = scan_choices(params, mode, pose, time, None, slot, spare, |s, q| {
+    let failures = scan_choices(params, mode, pose, time, None, slot, Some(spare), |s, q| {
         let cond = s.conditioning();
         if cond >= switch_below {
             best = Some((cond, q));
@@ -76,8 +76,10 @@ pub(super) enum Take {
 /// (repositioning a slot that holds the choice already, see [`Slot::reposition`]), and
 /// hands each that assembles to `take` with its coordinates. Each is built in
 /// `slot` or `spare`, whichever does not hold the choice kept last, so that no choice
-/// is built twice and no slot is copied or swapped (30 KB in f64) unless the choice
-/// kept last ends up in `spare`: then the two are swapped once at the end. Returns the
+/// is built twice and no slot is copied or swapped (20 KB in f64) unless the choice
+/// kept last ends up in `spare`: then the two are swapped once at the end. Without a
+/// spare each is built in `slot`, and the choice kept last, if a later one overwrote
+/// it, is built there again at the end. Returns the
 /// groups that failed in the others; an error that is not a group's (a non-finite
 /// input, a model that cannot be built) ends the scan. `slot` holds the last choice kept, if any.
 #[allow(clippy::too_many_arguments)]
@@ -88,33 +90,42 @@ pub(super) fn scan_choices<T: Real>(
     time: f64,
     skip: Option<Coordinates>,
     slot: &mut Slot<T>,
-    spare: &mut Slot<T>,
+    mut spare: Option<&mut Slot<T>>,
     mut take: impl FnMut(&Slot<T>, [T; 2]) -> Take,
 ) -> Result<heapless::Vec<Failure, 3>, TwinStepError> {
     let mut failures: heapless::Vec<Failure, 3> = heapless::Vec::new();
-    // Whether `slot` holds the choice kept last; the next is built in the other.
-    let (mut kept_in_slot, mut kept_any) = (false, false);
+    // Whether `slot` holds the choice kept last (the next is built in the other), and
+    // that choice.
+    let (mut kept_in_slot, mut kept) = (false, None);
     for coords in mode.coordinate_choices().iter().copied() {
         if Some(coords) == skip {
             continue;
         }
-        let target = if kept_in_slot {
-            &mut *spare
-        } else {
-            &mut *slot
+        let target = match spare.as_deref_mut() {
+            Some(spare) if kept_in_slot => spare,
+            _ => &mut *slot,
         };
         match target.reposition(params, mode, coords, pose, time) {
             Ok(q) => {
                 let verdict = take(target, q);
-                if !matches!(verdict, Take::No) {
-                    kept_in_slot = !kept_in_slot;
-                    kept_any = true;
+                let keep = !matches!(verdict, Take::No);
+                if keep {
+                    kept = Some(coords);
                 }
+                // With a spare the kept choice flips slots; without, the one slot
+                // holds this choice, kept or not.
+                kept_in_slot = if spare.is_some() {
+                    kept_in_slot != keep
+                } else {
+                    keep
+                };
                 if matches!(verdict, Take::KeepAndStop) {
                     break;
                 }
             }
             Err(TwinStepError::Step(StepError::Group { group, fault, .. })) => {
+                // Half-built: without a spare it was the kept choice's slot.
+                kept_in_slot &= spare.is_some();
                 let _ = failures.push(Failure {
                     coords,
                     group,
@@ -124,8 +135,13 @@ pub(super) fn scan_choices<T: Real>(
             Err(e) => return Err(e),
         }
     }
-    if !kept_in_slot && kept_any {
-        core::mem::swap(slot, spare);
+    match (kept, spare) {
+        (Some(_), Some(spare)) if !kept_in_slot => core::mem::swap(slot, spare),
+        // Overwritten by a later choice: built again (it assembled here before).
+        (Some(coords), None) if !kept_in_slot => {
+            slot.reposition(params, mode, coords, pose, time)?;
+        }
+        _ => {}
     }
     Ok(failures)
 }
@@ -193,9 +209,15 @@ impl<T: Real> Twin<T> {
         // its conditioning, so it could only win the scan by keeping its place, and
         // another choice is taken only if it beats it by 1.5.
         let skip = Some(self.slots.cur().coords);
-        // The reference slot is the spare: the mode choice builds it again.
+        // Before the step changed the current slot the candidate slot is free, the
+        // spare; after, it is the scratch and the backup holds the pre-step slot: no
+        // spare.
         let (backup, cand) = self.slots.spares();
-        let scratch = if w.switched { cand } else { backup };
+        let (scratch, spare) = if w.switched {
+            (cand, None)
+        } else {
+            (backup, Some(cand))
+        };
         let mut failures = scan_choices(
             &self.params,
             mode,
@@ -203,7 +225,7 @@ impl<T: Real> Twin<T> {
             time,
             skip,
             scratch,
-            &mut self.reference,
+            spare,
             |s, q| {
                 let cond = s.conditioning();
                 if best.as_ref().is_none_or(|(b, _, _)| cond > *b) {

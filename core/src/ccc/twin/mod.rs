@@ -178,7 +178,6 @@ pub struct Twin<T: Real> {
     drive: T,
     /// The current slot, the backup and the candidate slot ([`Slots`]).
     slots: Slots<T>,
-    reference: Slot<T>,
     dp5: Dp5<T, STATE>,
     y: SVector<T, STATE>,
     t: T,
