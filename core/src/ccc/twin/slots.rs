@@ -101,8 +101,11 @@ impl<T: Real> Slots<T> {
     /// Makes the slot of the reference model the scratch's ([`Twin::scratch`]), so that
     /// taking the scratch takes the reference model.
     pub(super) fn reference_to_scratch(&mut self) {
-        let r = usize::from(self.reference);
-        self.role.swap(r, if r == 0 { 2 } else { 1 });
+        if self.reference == 0 {
+            self.role.swap(0, 2);
+        } else {
+            self.role.swap(2, 1);
+        }
     }
 
     fn role_of(&self, k: u8) -> u8 {
