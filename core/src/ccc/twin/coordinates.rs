@@ -265,7 +265,7 @@ mod tests {
     use super::super::super::mode::{Coordinates, Mode};
     use super::super::super::params::CccParams;
     use super::super::slot::Slot;
-    use super::best_slot;
+    use super::{best_slot, scan_choices, Take};
 
     /// Each coordinate choice of `mode` built alone at `pose`: its conditioning there.
     fn conditionings(p: &CccParams<f64>, mode: Mode, pose: &[f64; 9]) -> [(Coordinates, f64); 3] {
@@ -322,5 +322,67 @@ mod tests {
         }
         // Some thresholds take another choice than 0.2 would: the test tells the two apart.
         assert!(moved > 0);
+    }
+
+    /// The scan of the coordinate switch keeps the best conditioned choice with a spare
+    /// slot and without (one slot: a kept choice that a later, worse one overwrote is
+    /// built again): the slot holds that choice, assembled at the pose with its
+    /// conditioning, for every mode at crank angles around the turn (the oracle: the
+    /// choices built one by one).
+    #[test]
+    fn the_scan_keeps_the_best_choice_with_and_without_a_spare() {
+        let p = CccParams::<f64>::reference();
+        let mut rebuilt = 0;
+        for deg in (0..360).step_by(30) {
+            let Some(pose) = initial_pose(&p, f64::from(deg).to_radians(), 90f64.to_radians())
+            else {
+                continue;
+            };
+            for mode in Mode::ALL {
+                let conds = conditionings(&p, mode, &pose);
+                let n = mode.coordinate_choices().len();
+                let Some(best) = conds.iter().take(n).filter(|(_, c)| *c >= 0.0).fold(
+                    None::<(Coordinates, f64)>,
+                    |b, c| match b {
+                        Some(b) if b.1 >= c.1 => Some(b),
+                        _ => Some(*c),
+                    },
+                ) else {
+                    continue;
+                };
+                for with_spare in [true, false] {
+                    let (mut slot, mut spare) = (Slot::empty(), Slot::empty());
+                    let mut kept: Option<f64> = None;
+                    let mut builds = 0;
+                    scan_choices(
+                        &p,
+                        mode,
+                        &pose,
+                        0.0,
+                        None,
+                        &mut slot,
+                        with_spare.then_some(&mut spare),
+                        |s, _| {
+                            builds += 1;
+                            let c = s.conditioning();
+                            if kept.is_none_or(|k| c > k) {
+                                kept = Some(c);
+                                Take::Keep
+                            } else {
+                                Take::No
+                            }
+                        },
+                    )
+                    .unwrap();
+                    assert!(slot.built, "{mode} at {deg}°");
+                    assert_eq!(slot.mode, mode);
+                    assert_eq!(slot.coords, best.0, "{mode} at {deg}°: {conds:?}");
+                    assert_eq!(slot.conditioning(), best.1, "{mode} at {deg}°");
+                    rebuilt += usize::from(!with_spare && builds > 1);
+                }
+            }
+        }
+        // Some scans without a spare built more than one choice.
+        assert!(rebuilt > 0);
     }
 }
