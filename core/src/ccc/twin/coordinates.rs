@@ -280,6 +280,14 @@ mod tests {
         out
     }
 
+    /// The poses with the swing link at 90° and the crank every `step` degrees around
+    /// the turn that assemble, with the crank angle (degrees).
+    fn poses(p: &CccParams<f64>, step: usize) -> impl Iterator<Item = (i32, [f64; 9])> + '_ {
+        (0..360).step_by(step).filter_map(move |deg| {
+            initial_pose(p, f64::from(deg).to_radians(), 90f64.to_radians()).map(|q| (deg, q))
+        })
+    }
+
     /// Which choice `best_slot` takes at `pose` with `switch_below`.
     fn taken(p: &CccParams<f64>, mode: Mode, pose: &[f64; 9], switch_below: f64) -> Coordinates {
         let (mut slot, mut spare) = (Slot::empty(), Slot::empty());
@@ -296,11 +304,7 @@ mod tests {
     fn best_slot_takes_the_first_choice_conditioned_at_least_switch_below() {
         let p = CccParams::<f64>::reference();
         let mut moved = 0;
-        for deg in (0..360).step_by(15) {
-            let Some(pose) = initial_pose(&p, f64::from(deg).to_radians(), 90f64.to_radians())
-            else {
-                continue;
-            };
+        for (deg, pose) in poses(&p, 15) {
             let conds = conditionings(&p, Mode::I0, &pose);
             let best = conds
                 .iter()
@@ -333,11 +337,7 @@ mod tests {
     fn the_scan_keeps_the_best_choice_with_and_without_a_spare() {
         let p = CccParams::<f64>::reference();
         let mut rebuilt = 0;
-        for deg in (0..360).step_by(30) {
-            let Some(pose) = initial_pose(&p, f64::from(deg).to_radians(), 90f64.to_radians())
-            else {
-                continue;
-            };
+        for (deg, pose) in poses(&p, 30) {
             for mode in Mode::ALL {
                 let conds = conditionings(&p, mode, &pose);
                 let n = mode.coordinate_choices().len();
