@@ -50,7 +50,7 @@ impl<T: Real> Capacity<T> for Generic {
     type Reactions = Array<[Reaction<T>; MAX_GROUP_JOINTS], MAX_GROUPS>;
 }
 
-/// A bounded list read as a slice: [`heapless::Vec`] of any capacity.
+/// A bounded list read as a slice: [`heapless::Vec`] of any capacity and length type.
 pub trait List<E>: Deref<Target = [E]> + DerefMut + Clone + Debug {
     /// The largest number of elements.
     const CAPACITY: usize;
@@ -68,7 +68,7 @@ pub trait List<E>: Deref<Target = [E]> + DerefMut + Clone + Debug {
     }
 }
 
-impl<E: Clone + Debug, const N: usize> List<E> for heapless::Vec<E, N> {
+impl<E: Clone + Debug, const N: usize, L: heapless::LenType> List<E> for heapless::Vec<E, N, L> {
     const CAPACITY: usize = N;
     fn new() -> Self {
         heapless::Vec::new()

@@ -36,7 +36,7 @@ impl<T: Real> Twin<T> {
         // Physical angular speeds after the impact, from the reference model's V.
         let mut omega = [T::zero(); 9];
         for (p, o) in omega.iter_mut().enumerate().skip(1) {
-            let [v0, v1] = self.reference.omega_row(p);
+            let [v0, v1] = self.slots.reference().omega_row(p);
             *o = v0 * u_plus[0] + v1 * u_plus[1];
         }
         let placed = self.place_candidate(w, m, pose, &omega, inputs, screened.is_some());
@@ -48,7 +48,7 @@ impl<T: Real> Twin<T> {
         let clear = screened.filter(|c| torques_clear(m, c, inputs));
         let place = placed.map_or(Place::Scratch, |(p, _)| p);
         let (cand, params) = match place {
-            Place::Reference => (&mut self.reference, &self.params),
+            Place::Reference => (self.slots.reference_mut(), &self.params),
             Place::Scratch => self.scratch(w.switched),
         };
         let ok = placed.is_some() && {
@@ -137,7 +137,7 @@ impl<T: Real> Twin<T> {
                 inputs,
                 scale_w,
             };
-            if let Some(gap) = self.load_candidate(w, m, c2, &load, false) {
+            if let Some(gap) = self.load_candidate(w, m, c2, &load) {
                 let cond = self.scratch(w.switched).0.conditioning();
                 if cond >= self.settings.switch_below && cond > p * T::c(1.5 * (1.0 + 1e-9)) {
                     return Some((Place::Scratch, gap));
@@ -170,50 +170,35 @@ impl<T: Real> Twin<T> {
         ordered: impl Iterator<Item = (Coordinates, bool)>,
         load: &Load<'_, T>,
     ) -> Option<T> {
-        // (conditioning, choice, speed gap) of the choice taken, and which slot holds
-        // it (`Some(second)`, see `Twin::build_slot`; `None`: none, it was overwritten).
+        // (conditioning, choice, speed gap) of the choice taken, and whether the
+        // scratch slot still holds it (a later choice built there overwrites it).
+        // One slot is free for candidates: the other holds the reference model.
         let mut chosen: Option<(T, Coordinates, T)> = None;
-        let mut kept: Option<bool> = None;
-        // Before the step changed the current slot, two slots are free: the choice
-        // kept so far stays in one while the next is built in the other, so none is
-        // built twice (with one slot, a kept choice that a later, worse one overwrote
-        // is built again at the end).
-        let two = !w.switched;
+        let mut kept = false;
         for (coords, dead) in ordered {
             if chosen.is_some() && dead {
                 break;
             }
-            let second = two && kept == Some(false);
-            let Some(gap) = self.load_candidate(w, m, coords, load, second) else {
-                if !two {
-                    kept = None;
-                }
+            let Some(gap) = self.load_candidate(w, m, coords, load) else {
+                kept = false;
                 continue;
             };
-            let cond = self.build_slot(w.switched, second).0.conditioning();
+            let cond = self.scratch(w.switched).0.conditioning();
             if chosen.is_none_or(|(c, _, _)| cond > c * T::c(1.5)) {
                 chosen = Some((cond, coords, gap));
-                kept = Some(second);
-            } else if !two {
-                kept = None;
+                kept = true;
+            } else {
+                kept = false;
             }
             if chosen.is_some_and(|(c, _, _)| c >= self.settings.switch_below) {
                 break;
             }
         }
         match (chosen, kept) {
-            (Some((_, _, gap)), Some(second)) => {
-                if second {
-                    // The candidate slot becomes the scratch, where `take_candidate`
-                    // takes the pick from (the other slot, free, becomes the candidate
-                    // slot): a flip of roles, no copy.
-                    self.slots.role.swap(1, 2);
-                }
-                Some(gap)
-            }
+            (Some((_, _, gap)), true) => Some(gap),
             // Overwritten by a later choice in the one free slot: built again at the
             // scan's pose and speeds.
-            (Some((_, coords, _)), None) => self.load_candidate(w, m, coords, load, false),
+            (Some((_, coords, _)), false) => self.load_candidate(w, m, coords, load),
             (None, _) => None,
         }
     }
@@ -235,7 +220,7 @@ impl<T: Real> Twin<T> {
         omega: &[T; 9],
         scale_w: T,
     ) -> Option<T> {
-        let r = &self.reference;
+        let r = self.slots.reference();
         if !(r.built
             && r.mode == m
             && Some(r.coords) == first
@@ -262,8 +247,7 @@ impl<T: Real> Twin<T> {
     }
 
     /// Builds mode `m` driven by `coords` at `load`'s pose with its physical speeds
-    /// into the candidate slot (`second`: the other free one, see
-    /// [`Twin::build_slot`]), moving the model it holds if it is that one (see
+    /// into the scratch slot ([`Twin::scratch`]), moving the model it holds if it is that one (see
     /// [`Slot::reposition`]), and evaluates its equations of motion (not the
     /// kinetostatics); returns its speed gap (rad/s: the largest difference between a
     /// link's speed in the built model and the one it was given), `None` if it does
@@ -274,11 +258,10 @@ impl<T: Real> Twin<T> {
         m: Mode,
         coords: Coordinates,
         load: &Load<'_, T>,
-        second: bool,
     ) -> Option<T> {
         let time = w.t.to_f64();
         let drive = self.drive;
-        let (cand, params) = self.build_slot(w.switched, second);
+        let (cand, params) = self.scratch(w.switched);
         let q = match cand.reposition(params, m, coords, load.pose, time) {
             Ok(q) => q,
             Err(e) => {

@@ -13,6 +13,9 @@ use crate::model::{Link, Load};
 use crate::scalar::{Real, Vec2};
 use crate::structomat::{Group, GroupData};
 use crate::workspace::Reaction;
+use core::mem::size_of;
+
+use super::Twin;
 
 /// Groups of a mode's sequence: 5 (free, I0, A6 and A8: the crank, the dyads of the
 /// coupler and rocker, and of each rod and lever).
@@ -45,11 +48,14 @@ pub(crate) const LOADS: usize = 0;
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Converter;
 
+// The converter's lists count in a byte (their lengths are at most 8): 7 bytes less a
+// list than `usize`'s on a 64-bit host, 3 on the Cortex-M (where f32 data is 4-byte
+// aligned, the bytes are not padding).
 impl<T: Real> Capacity<T> for Converter {
-    type GroundPoints = heapless::Vec<Vec2<T>, GROUND_POINTS>;
-    type Links = heapless::Vec<Link<T>, LINKS>;
-    type Groups = heapless::Vec<Group<T>, GROUPS>;
-    type Loads = heapless::Vec<Load<T>, LOADS>;
+    type GroundPoints = heapless::Vec<Vec2<T>, GROUND_POINTS, u8>;
+    type Links = heapless::Vec<Link<T>, LINKS, u8>;
+    type Groups = heapless::Vec<Group<T>, GROUPS, u8>;
+    type Loads = heapless::Vec<Load<T>, LOADS, u8>;
     type GroupData = Array<GroupData<T>, GROUPS>;
     type Reactions = Array<[Reaction<T>; MAX_GROUP_JOINTS], GROUPS>;
 }
@@ -69,9 +75,47 @@ const _: () = assert!(
     "the converter's mode models fit the core's capacities"
 );
 
+/// The twin's RAM budget, checked at compile time on every target: `Twin<f32>` in 32
+/// KiB (a quarter of a 128 KiB Cortex-M4F's RAM), `Twin<f64>` in 64 KiB. Its three
+/// slots, each a model and a workspace of these capacities, are 94 % of it.
+const _: () = assert!(
+    size_of::<Twin<f32>>() <= 32 * 1024,
+    "Twin<f32> fits in 32 KiB"
+);
+const _: () = assert!(
+    size_of::<Twin<f64>>() <= 64 * 1024,
+    "Twin<f64> fits in 64 KiB"
+);
+
 #[cfg(test)]
 mod tests {
+    use super::super::slot::Slot;
     use super::*;
+
+    /// The twin is its three slots and under 2 KiB (f32) / 4 KiB (f64) of state and
+    /// logs (the fields of `Twin` other than `slots`: 1.6 and 3.1 KB on x86_64), and
+    /// within the budgets asserted at compile time above.
+    #[test]
+    fn the_twin_is_three_slots_and_its_state() {
+        fn check<T: Real>(budget: usize, rest: usize) -> usize {
+            let (twin, slot) = (size_of::<Twin<T>>(), size_of::<Slot<T>>());
+            assert!(twin >= 3 * slot, "{twin} B < 3 slots of {slot} B");
+            assert!(
+                twin < 3 * slot + rest,
+                "{twin} B: more than 3 slots of {slot} B"
+            );
+            assert!(twin <= budget, "{twin} B over {budget} B");
+            twin
+        }
+        let t32 = check::<f32>(32 * 1024, 2 * 1024);
+        let t64 = check::<f64>(64 * 1024, 4 * 1024);
+        // f32 halves the floating-point data; indices, lengths and flags stay.
+        let ratio = t32 as f64 / t64 as f64;
+        assert!(
+            (0.5..0.56).contains(&ratio),
+            "f32/f64 twin size ratio {ratio}"
+        );
+    }
     use crate::ccc::build::{build, initial_pose};
     use crate::ccc::mode::Mode;
     use crate::ccc::params::CccParams;

@@ -13,6 +13,7 @@ use super::inputs::Inputs;
 use super::settings::*;
 use super::slot::unwrap_near;
 use super::slot::{LinkState, QD, STATE};
+use super::slots::Slots;
 use super::{joint_gap, shaft_speed, shaft_turn, Twin, Work};
 use crate::scalar::Real;
 use nalgebra::{SMatrix, SVector};
@@ -78,7 +79,8 @@ impl<T: Real> Twin<T> {
     }
 
     /// The generalized momentum space of the unconstrained diode at `w`'s state: I0 (the
-    /// 2-DOF model, plus the shaft when it has inertia) built in the reference slot at
+    /// 2-DOF model, plus the shaft when it has inertia) built in the slot the choice
+    /// leaves free ([`Slots::reference_role`]; the scratch is its spare) at
     /// `pose` and evaluated at the links' speeds `links` and the shaft's `shaft`.
     fn momentum_space(
         &mut self,
@@ -88,22 +90,25 @@ impl<T: Real> Twin<T> {
         shaft: T,
         inputs: &Inputs<T>,
     ) -> Result<MomentumSpace<T>, TwinStepError> {
+        self.slots.reference = Slots::<T>::reference_role(w.switched);
+        let (reference, scratch) = self.slots.reference_and_scratch();
         let qr = best_slot(
             &self.params,
             Mode::I0,
             pose,
             w.t.to_f64(),
             self.settings.switch_below,
-            &mut self.reference,
-            self.slots.spares().1,
+            reference,
+            scratch,
         )?;
         let mut yr = SVector::<T, STATE>::zeros();
         for k in 0..2 {
             yr[k] = qr[k];
-            let p = self.reference.map.coord_link[k] as usize;
+            let p = self.slots.reference().map.coord_link[k] as usize;
             yr[QD + k] = links.get(p).map_or_else(T::zero, |l| l.omega);
         }
-        self.reference
+        self.slots
+            .reference_mut()
             .eval(w.t, &yr, inputs, self.drive)
             .map_err(|e| self.physical_error(e))?;
         let js = self.params.shaft_inertia;
@@ -111,7 +116,7 @@ impl<T: Real> Twin<T> {
         let mut mass = SMatrix::<T, 3, 3>::identity();
         for r in 0..2 {
             for c in 0..2 {
-                mass[(r, c)] = self.reference.ws.mass_q[(r, c)];
+                mass[(r, c)] = self.slots.reference().ws.mass_q[(r, c)];
             }
         }
         if with_shaft {
@@ -134,7 +139,8 @@ impl<T: Real> Twin<T> {
     /// projected onto them (with the impact's loss, J); `None` if they are
     /// rank-deficient.
     fn projected(&self, m: Mode, space: &MomentumSpace<T>) -> Projected<T> {
-        let rows = constraint_rows(m, space.with_shaft, |lever| self.reference.lever_row(lever));
+        let r = self.slots.reference();
+        let rows = constraint_rows(m, space.with_shaft, |lever| r.lever_row(lever));
         let projection = project(&space.mass, &space.u, &rows);
         (rows, projection)
     }
@@ -269,12 +275,9 @@ impl<T: Real> Twin<T> {
             return Err(TwinStepError::Coasting { time });
         }
         // The candidate slot holds the chosen mode, evaluated: take it. If that was the
-        // reference model, it becomes the scratch slot first (a swap, ~4k
-        // instructions in f64), and the scratch's model is the reference's until the
-        // next event repositions or rebuilds it.
+        // reference model, its slot takes the scratch's role first (no copy).
         if cand.place == Place::Reference {
-            let (backup, cand) = self.slots.spares();
-            core::mem::swap(&mut self.reference, if w.switched { cand } else { backup });
+            self.slots.reference_to_scratch();
         }
         self.take_candidate(w);
         w.chosen = true;

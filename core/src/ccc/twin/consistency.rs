@@ -123,18 +123,18 @@ impl<T: Real> Twin<T> {
         // candidate itself (see `Twin::reference_is_candidate`).
         let scale = u_plus.iter().fold(T::one(), |a, v| a.max(v.abs()));
         let moved = (0..2).fold(T::zero(), |a, k| a.max((yr[QD + k] - u_plus[k]).abs()));
-        let exact = m == self.reference.mode;
+        let exact = m == self.slots.reference().mode;
         if !(moved <= screen_margin::<T>() * T::c(1e-3) * scale) || (exact && moved != T::zero()) {
             yr[QD] = u_plus[0];
             yr[QD + 1] = u_plus[1];
-            if self.reference.eval(t, yr, inputs, d).is_err() {
+            if self.slots.reference_mut().eval(t, yr, inputs, d).is_err() {
                 // The workspace holds no evaluation: the next screen evaluates again.
                 yr[QD] = T::c(f64::NAN);
                 return None;
             }
         }
         let x = self.reference_kkt(m, inputs)?;
-        let r = &self.reference;
+        let r = self.slots.reference();
         let row = |lever: usize| r.lever_row(lever);
         // The multipliers in the order of `constraint_rows`: one per locked or engaged
         // lever, in branch order.
@@ -161,7 +161,7 @@ impl<T: Real> Twin<T> {
     /// solution not finite.
     fn reference_kkt(&self, m: Mode, inputs: &Inputs<T>) -> Option<SVector<T, 6>> {
         let d = self.drive;
-        let r = &self.reference;
+        let r = self.slots.reference();
         let row = |lever: usize| r.lever_row(lever);
         let rows = constraint_rows(m, true, row);
         // The constraints' bias terms: the same combinations of the levers' bias

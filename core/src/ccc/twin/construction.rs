@@ -48,10 +48,10 @@ impl<T: Real> Twin<T> {
             drive: params.drive.sign(),
             params,
             settings,
-            reference: slot.clone(),
             slots: Slots {
                 s: [slot.clone(), slot, spare],
                 role: [0, 1, 2],
+                reference: 2,
             },
             dp5: Dp5::new(),
             y: SVector::zeros(),
@@ -113,7 +113,6 @@ impl<T: Real> Twin<T> {
             spare,
         )?;
         backup.clone_from(slot);
-        twin.reference.clone_from(slot);
         twin.start_at(&q, &pose, &inputs)?;
         Ok(twin)
     }
@@ -139,7 +138,7 @@ impl<T: Real> Twin<T> {
                 Slot::init_empty(s);
             }
             addr_of_mut!((*p).slots.role).write([0, 1, 2]);
-            Slot::init_empty(uninit(addr_of_mut!((*p).reference)));
+            addr_of_mut!((*p).slots.reference).write(2);
             addr_of_mut!((*p).dp5).write(Dp5::new());
             addr_of_mut!((*p).y).write(SVector::zeros());
             addr_of_mut!((*p).t).write(T::zero());
@@ -237,8 +236,11 @@ fn fields_of<T: Real>(t: &Twin<T>) {
         params: _,
         settings: _,
         drive: _,
-        slots: Slots { s: _, role: _ },
-        reference: _,
+        slots: Slots {
+            s: _,
+            role: _,
+            reference: _,
+        },
         dp5: _,
         y: _,
         t: _,

@@ -43,7 +43,7 @@ pub(super) fn best_slot<T: Real>(
 ) -> Result<[T; 2], TwinStepError> {
     // (conditioning, coordinates) of the best so far, which `slot` holds.
     let mut best: Option<(T, [T; 2])> = None;
-    let failures = scan_choices(params, mode, pose, time, None, slot, spare, |s, q| {
+    let failures = scan_choices(params, mode, pose, time, None, slot, Some(spare), |s, q| {
         let cond = s.conditioning();
         if cond >= switch_below {
             best = Some((cond, q));
@@ -76,8 +76,10 @@ pub(super) enum Take {
 /// (repositioning a slot that holds the choice already, see [`Slot::reposition`]), and
 /// hands each that assembles to `take` with its coordinates. Each is built in
 /// `slot` or `spare`, whichever does not hold the choice kept last, so that no choice
-/// is built twice and no slot is copied or swapped (30 KB in f64) unless the choice
-/// kept last ends up in `spare`: then the two are swapped once at the end. Returns the
+/// is built twice and no slot is copied or swapped (20 KB in f64) unless the choice
+/// kept last ends up in `spare`: then the two are swapped once at the end. Without a
+/// spare each is built in `slot`, and the choice kept last, if a later one overwrote
+/// it, is built there again at the end. Returns the
 /// groups that failed in the others; an error that is not a group's (a non-finite
 /// input, a model that cannot be built) ends the scan. `slot` holds the last choice kept, if any.
 #[allow(clippy::too_many_arguments)]
@@ -88,33 +90,42 @@ pub(super) fn scan_choices<T: Real>(
     time: f64,
     skip: Option<Coordinates>,
     slot: &mut Slot<T>,
-    spare: &mut Slot<T>,
+    mut spare: Option<&mut Slot<T>>,
     mut take: impl FnMut(&Slot<T>, [T; 2]) -> Take,
 ) -> Result<heapless::Vec<Failure, 3>, TwinStepError> {
     let mut failures: heapless::Vec<Failure, 3> = heapless::Vec::new();
-    // Whether `slot` holds the choice kept last; the next is built in the other.
-    let (mut kept_in_slot, mut kept_any) = (false, false);
+    // Whether `slot` holds the choice kept last (the next is built in the other), and
+    // that choice.
+    let (mut kept_in_slot, mut kept) = (false, None);
     for coords in mode.coordinate_choices().iter().copied() {
         if Some(coords) == skip {
             continue;
         }
-        let target = if kept_in_slot {
-            &mut *spare
-        } else {
-            &mut *slot
+        let target = match spare.as_deref_mut() {
+            Some(spare) if kept_in_slot => spare,
+            _ => &mut *slot,
         };
         match target.reposition(params, mode, coords, pose, time) {
             Ok(q) => {
                 let verdict = take(target, q);
-                if !matches!(verdict, Take::No) {
-                    kept_in_slot = !kept_in_slot;
-                    kept_any = true;
+                let keep = !matches!(verdict, Take::No);
+                if keep {
+                    kept = Some(coords);
                 }
+                // With a spare the kept choice flips slots; without, the one slot
+                // holds this choice, kept or not.
+                kept_in_slot = if spare.is_some() {
+                    kept_in_slot != keep
+                } else {
+                    keep
+                };
                 if matches!(verdict, Take::KeepAndStop) {
                     break;
                 }
             }
             Err(TwinStepError::Step(StepError::Group { group, fault, .. })) => {
+                // Half-built: without a spare it was the kept choice's slot.
+                kept_in_slot &= spare.is_some();
                 let _ = failures.push(Failure {
                     coords,
                     group,
@@ -124,8 +135,13 @@ pub(super) fn scan_choices<T: Real>(
             Err(e) => return Err(e),
         }
     }
-    if !kept_in_slot && kept_any {
-        core::mem::swap(slot, spare);
+    match (kept, spare) {
+        (Some(_), Some(spare)) if !kept_in_slot => core::mem::swap(slot, spare),
+        // Overwritten by a later choice: built again (it assembled here before).
+        (Some(coords), None) if !kept_in_slot => {
+            slot.reposition(params, mode, coords, pose, time)?;
+        }
+        _ => {}
     }
     Ok(failures)
 }
@@ -193,9 +209,15 @@ impl<T: Real> Twin<T> {
         // its conditioning, so it could only win the scan by keeping its place, and
         // another choice is taken only if it beats it by 1.5.
         let skip = Some(self.slots.cur().coords);
-        // The reference slot is the spare: the mode choice builds it again.
+        // Before the step changed the current slot the candidate slot is free, the
+        // spare; after, it is the scratch and the backup holds the pre-step slot: no
+        // spare.
         let (backup, cand) = self.slots.spares();
-        let scratch = if w.switched { cand } else { backup };
+        let (scratch, spare) = if w.switched {
+            (cand, None)
+        } else {
+            (backup, Some(cand))
+        };
         let mut failures = scan_choices(
             &self.params,
             mode,
@@ -203,7 +225,7 @@ impl<T: Real> Twin<T> {
             time,
             skip,
             scratch,
-            &mut self.reference,
+            spare,
             |s, q| {
                 let cond = s.conditioning();
                 if best.as_ref().is_none_or(|(b, _, _)| cond > *b) {
@@ -243,7 +265,7 @@ mod tests {
     use super::super::super::mode::{Coordinates, Mode};
     use super::super::super::params::CccParams;
     use super::super::slot::Slot;
-    use super::best_slot;
+    use super::{best_slot, scan_choices, Take};
 
     /// Each coordinate choice of `mode` built alone at `pose`: its conditioning there.
     fn conditionings(p: &CccParams<f64>, mode: Mode, pose: &[f64; 9]) -> [(Coordinates, f64); 3] {
@@ -256,6 +278,14 @@ mod tests {
             }
         }
         out
+    }
+
+    /// The poses with the swing link at 90° and the crank every `step` degrees around
+    /// the turn that assemble, with the crank angle (degrees).
+    fn poses(p: &CccParams<f64>, step: usize) -> impl Iterator<Item = (i32, [f64; 9])> + '_ {
+        (0..360).step_by(step).filter_map(move |deg| {
+            initial_pose(p, f64::from(deg).to_radians(), 90f64.to_radians()).map(|q| (deg, q))
+        })
     }
 
     /// Which choice `best_slot` takes at `pose` with `switch_below`.
@@ -274,11 +304,7 @@ mod tests {
     fn best_slot_takes_the_first_choice_conditioned_at_least_switch_below() {
         let p = CccParams::<f64>::reference();
         let mut moved = 0;
-        for deg in (0..360).step_by(15) {
-            let Some(pose) = initial_pose(&p, f64::from(deg).to_radians(), 90f64.to_radians())
-            else {
-                continue;
-            };
+        for (deg, pose) in poses(&p, 15) {
             let conds = conditionings(&p, Mode::I0, &pose);
             let best = conds
                 .iter()
@@ -300,5 +326,63 @@ mod tests {
         }
         // Some thresholds take another choice than 0.2 would: the test tells the two apart.
         assert!(moved > 0);
+    }
+
+    /// The scan of the coordinate switch keeps the best conditioned choice with a spare
+    /// slot and without (one slot: a kept choice that a later, worse one overwrote is
+    /// built again): the slot holds that choice, assembled at the pose with its
+    /// conditioning, for every mode at crank angles around the turn (the oracle: the
+    /// choices built one by one).
+    #[test]
+    fn the_scan_keeps_the_best_choice_with_and_without_a_spare() {
+        let p = CccParams::<f64>::reference();
+        let mut rebuilt = 0;
+        for (deg, pose) in poses(&p, 30) {
+            for mode in Mode::ALL {
+                let conds = conditionings(&p, mode, &pose);
+                let n = mode.coordinate_choices().len();
+                let Some(best) = conds.iter().take(n).filter(|(_, c)| *c >= 0.0).fold(
+                    None::<(Coordinates, f64)>,
+                    |b, c| match b {
+                        Some(b) if b.1 >= c.1 => Some(b),
+                        _ => Some(*c),
+                    },
+                ) else {
+                    continue;
+                };
+                for with_spare in [true, false] {
+                    let (mut slot, mut spare) = (Slot::empty(), Slot::empty());
+                    let mut kept: Option<f64> = None;
+                    let mut builds = 0;
+                    scan_choices(
+                        &p,
+                        mode,
+                        &pose,
+                        0.0,
+                        None,
+                        &mut slot,
+                        with_spare.then_some(&mut spare),
+                        |s, _| {
+                            builds += 1;
+                            let c = s.conditioning();
+                            if kept.is_none_or(|k| c > k) {
+                                kept = Some(c);
+                                Take::Keep
+                            } else {
+                                Take::No
+                            }
+                        },
+                    )
+                    .unwrap();
+                    assert!(slot.built, "{mode} at {deg}°");
+                    assert_eq!(slot.mode, mode);
+                    assert_eq!(slot.coords, best.0, "{mode} at {deg}°: {conds:?}");
+                    assert_eq!(slot.conditioning(), best.1, "{mode} at {deg}°");
+                    rebuilt += usize::from(!with_spare && builds > 1);
+                }
+            }
+        }
+        // Some scans without a spare built more than one choice.
+        assert!(rebuilt > 0);
     }
 }

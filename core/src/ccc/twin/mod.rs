@@ -84,9 +84,10 @@ use slots::Slots;
 /// a step); no indexing on the step path can panic, and a failed step returns an error
 /// and keeps the last good state.
 ///
-/// **Size.** `size_of::<Twin<f64>>()` is 125 640 B (122.7 KiB), `Twin<f32>` 64 720 B
-/// (63.2 KiB): three working slots and the reference model, each a model and a
-/// workspace (`tests/footprint.rs` asserts the budgets: 128 KiB and 64 KiB). A step's
+/// **Size.** `size_of::<Twin<f64>>()` is 63 528 B (62.0 KiB), `Twin<f32>` 32 744 B
+/// (32.0 KiB) on x86_64: three slots, each a model and a workspace sized for the
+/// converter; the mode choice builds its reference model in the one it leaves free
+/// (the core asserts the budgets at compile time: 64 KiB and 32 KiB). A step's
 /// stack high-water is about 14 KiB in f64 and 8.5 KiB in f32 on x86_64 (S2, events
 /// included), 15.7 and 8.8 KiB painted on the Cortex-M boards.
 ///
@@ -179,7 +180,6 @@ pub struct Twin<T: Real> {
     drive: T,
     /// The current slot, the backup and the candidate slot ([`Slots`]).
     slots: Slots<T>,
-    reference: Slot<T>,
     dp5: Dp5<T, STATE>,
     y: SVector<T, STATE>,
     t: T,

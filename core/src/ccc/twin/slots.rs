@@ -6,17 +6,26 @@ use super::{Twin, Work};
 use crate::scalar::Real;
 use crate::workspace::WarmStart;
 
-/// The twin's three working slots (30 KB each in f64) and their roles: the current
-/// slot, the backup (the pre-step slot once a step changed the current one, see
+/// The twin's three slots (20 KB each in f64, 10 KB in f32) and their roles: the
+/// current slot, the backup (the pre-step slot once a step changed the current one, see
 /// [`Twin::scratch`]) and the candidate slot. The roles move, never the slots: taking
 /// a candidate, restoring the backup or handing the backup's role to the slot that
 /// holds a pick permutes `role` (a 30 KB swap cost 7.5k instructions per event).
+///
+/// The mode choice's reference model (I0, see [`Twin::choose`]) has no slot of its
+/// own: it is built, at each event, in the one slot the choice does not need
+/// ([`Slots::reference`]), and nothing of it is read after the event. Its models
+/// are dyads only, so it gives the same bits in any slot (a rebuild and a
+/// reposition of a dyad agree).
 #[derive(Clone, Debug)]
 pub(super) struct Slots<T: Real> {
     pub(super) s: [Slot<T>; 3],
     /// Indices into `s` of the current slot, the backup and the candidate slot: a
     /// permutation of 0, 1, 2 (only ever swapped).
     pub(super) role: [u8; 3],
+    /// The role whose slot holds the reference model during a mode choice
+    /// ([`Slots::reference_role`]).
+    pub(super) reference: u8,
 }
 
 impl<T: Real> Slots<T> {
@@ -35,12 +44,72 @@ impl<T: Real> Slots<T> {
     }
 
     pub(super) fn cur_mut(&mut self) -> &mut Slot<T> {
+        self.at_mut(0)
+    }
+
+    fn at_mut(&mut self, k: usize) -> &mut Slot<T> {
         let [a, b, c] = &mut self.s;
-        match self.role.first() {
+        match self.role.get(k) {
             Some(0) => a,
             Some(1) => b,
             _ => c,
         }
+    }
+
+    /// The role free for the reference model during a mode choice, `switched`: the step
+    /// changed the current slot before. Before that the current slot is the pre-step
+    /// one and the backup the scratch: the candidate slot is free. After, the backup
+    /// holds the pre-step slot and the candidate slot is the scratch: the current slot
+    /// (the mode the event ends) is free, as the choice replaces it (and a failed
+    /// choice fails the attempt, which restores the backup).
+    pub(super) fn reference_role(switched: bool) -> u8 {
+        if switched {
+            0
+        } else {
+            2
+        }
+    }
+
+    /// The reference model of the mode choice under way (its slot
+    /// [`Slots::reference_role`], set by [`Twin::choose`]).
+    pub(super) fn reference(&self) -> &Slot<T> {
+        self.at(usize::from(self.reference))
+    }
+
+    pub(super) fn reference_mut(&mut self) -> &mut Slot<T> {
+        self.at_mut(usize::from(self.reference))
+    }
+
+    /// `(reference, scratch)` of the mode choice under way: the scratch is the backup
+    /// before the step changed the current slot, the candidate slot after
+    /// ([`Twin::scratch`]); always another slot than the reference's.
+    pub(super) fn reference_and_scratch(&mut self) -> (&mut Slot<T>, &mut Slot<T>) {
+        let scratch = if self.reference == 0 { 2 } else { 1 };
+        let (r, s) = (self.role_of(self.reference), self.role_of(scratch));
+        let [a, b, c] = &mut self.s;
+        // Two distinct roles of a permutation: two distinct slots.
+        match (r, s) {
+            (0, 1) => (a, b),
+            (0, _) => (a, c),
+            (1, 0) => (b, a),
+            (1, _) => (b, c),
+            (_, 0) => (c, a),
+            _ => (c, b),
+        }
+    }
+
+    /// Makes the slot of the reference model the scratch's ([`Twin::scratch`]), so that
+    /// taking the scratch takes the reference model.
+    pub(super) fn reference_to_scratch(&mut self) {
+        if self.reference == 0 {
+            self.role.swap(0, 2);
+        } else {
+            self.role.swap(2, 1);
+        }
+    }
+
+    fn role_of(&self, k: u8) -> u8 {
+        self.role.get(usize::from(k)).copied().unwrap_or(2)
     }
 
     /// `(backup, candidate slot)`.
@@ -67,21 +136,6 @@ impl<T: Real> Twin<T> {
     pub(super) fn scratch(&mut self, switched: bool) -> (&mut Slot<T>, &CccParams<T>) {
         let (backup, cand) = self.slots.spares();
         (if switched { cand } else { backup }, &self.params)
-    }
-
-    /// The slot a candidate is built in: the scratch ([`Twin::scratch`]), or with
-    /// `second` before the step changed the current slot (`switched` false), the
-    /// candidate slot, the other one free then.
-    pub(super) fn build_slot(
-        &mut self,
-        switched: bool,
-        second: bool,
-    ) -> (&mut Slot<T>, &CccParams<T>) {
-        if second && !switched {
-            (self.slots.spares().1, &self.params)
-        } else {
-            self.scratch(switched)
-        }
     }
 
     /// Makes the scratch slot ([`Twin::scratch`]), which holds the new mode or
