@@ -8,6 +8,7 @@
 mod common;
 
 use common::{numeric_csv, TempDir};
+use std::path::Path;
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
@@ -151,6 +152,32 @@ fn an_output_that_names_the_run_file_is_refused() {
         assert!(err.contains("is the run file itself"), "{err}");
         assert_eq!(std::fs::read_to_string(&file).unwrap(), text, "{flag}");
     }
+}
+
+/// Two outputs that are one file (`--out a.svg --animate a.svg`, however spelled) are
+/// refused before anything is written: the animation would overwrite the CSV. A file
+/// already there is left as it was.
+#[test]
+fn two_outputs_that_are_one_file_are_refused() {
+    let dir = TempDir::new("whole-twice");
+    let first = dir.join("a.svg");
+    std::fs::write(&first, "kept").unwrap();
+    let again = format!("{}/./a.svg", dir.path.display());
+    for (out, animate) in [(&first, &first), (&first, &again)] {
+        let (code, _, err) = common::run(&[
+            "run", "five-bar", "--t-end", "0.01", "--out", out, "--animate", animate,
+        ]);
+        assert_eq!(code, 2, "{err}");
+        assert!(err.contains("are one file"), "{err}");
+        assert_eq!(std::fs::read_to_string(&first).unwrap(), "kept");
+    }
+    // Not there yet: refused all the same, and nothing is written.
+    let fresh = dir.join("b.gif");
+    let (code, _, err) = common::run(&[
+        "run", "five-bar", "--t-end", "0.01", "--out", &fresh, "--animate", &fresh,
+    ]);
+    assert_eq!(code, 2, "{err}");
+    assert!(!Path::new(&fresh).exists(), "{err}");
 }
 
 /// With `stderr` a pipe (not a terminal), a run prints no progress line: `stderr`
