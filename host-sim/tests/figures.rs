@@ -302,3 +302,28 @@ fn tiny_figures_have_exponents() {
     let k = number_after(&summary, "end ");
     assert!(k > 0.0 && k < 1e-6, "K(2 µs) = {k}\n{summary}");
 }
+
+/// The summary's switch lines read as sentences: one switch is "1 change", and a
+/// switch back to the first coordinates says so instead of a `-` for the group.
+/// `stretched-four-bar.toml` switches once (at t = 0.853 s), `crank-triad.toml`
+/// switches away and back twice each in its first 1.1 s (at 0.455, 0.593, 0.992, 1.083 s).
+#[test]
+fn switch_lines_read() {
+    let mechanisms = concat!(env!("CARGO_MANIFEST_DIR"), "/mechanisms");
+    let one = format!("{mechanisms}/stretched-four-bar.toml");
+    let (code, _, summary) = run(&["run", &one, "--out", "-"]);
+    assert_eq!(code, 0, "{summary}");
+    assert!(
+        summary.contains("switches  1 change of coordinates"),
+        "{summary}"
+    );
+    let triad = format!("{mechanisms}/crank-triad.toml");
+    let (code, _, summary) = run(&["run", &triad, "--t-end", "1.1", "--out", "-"]);
+    assert_eq!(code, 0, "{summary}");
+    assert!(summary.contains("switches  4 changes"), "{summary}");
+    assert!(
+        summary.contains("(back to the first coordinates: conditioning "),
+        "{summary}"
+    );
+    assert!(!summary.contains("(- at"), "{summary}");
+}
