@@ -34,6 +34,14 @@ use structomat::{ModelError, Real};
 /// then far coarser than the mechanism's own energies and torques.
 pub const MAX_LOAD: f64 = 1e12;
 
+/// The converter's load torque T_r (N·m) from which on a run is refused: the twin
+/// releases a locked lever when its clutch torque falls below -1e-9 (T_r + 1 N·m)
+/// (`structomat::ccc`'s torque tolerance), so from 1e6 N·m on an accepted state may
+/// hold a clutch torque below -1e-3 N·m and a release comes late by that tolerance
+/// over the torque's rate (S2 at T_r = 1e7: c8 = -7.4e-3 N·m, the release 5e-5 s
+/// late; at 1e11, -98 N·m), far coarser than the converter's own torques.
+pub const MAX_CONVERTER_LOAD: f64 = 1e6;
+
 /// A bad run file: which file, where (when the toml parser knows), which field, what is
 /// wrong. Displayed as `FILE[:LINE:COLUMN]: FIELD: MESSAGE`.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -867,6 +875,23 @@ impl Check<'_> {
         }
     }
 
+    /// The converter's load torque T_r (N·m): finite and below [`MAX_CONVERTER_LOAD`].
+    fn converter_load(&self, field: &str, x: f64) -> Result<f64, FileError> {
+        self.finite(field, x)?;
+        if x.abs() < MAX_CONVERTER_LOAD {
+            Ok(x)
+        } else {
+            Err(self.err(
+                field,
+                format!(
+                    "{} N·m is too large: from {} N·m on the clutch tolerance 1e-9 (T_r + 1 N·m) lets a locked lever hold a negative torque past 1e-3 N·m and releases it late",
+                    Sci(x),
+                    Sci(MAX_CONVERTER_LOAD)
+                ),
+            ))
+        }
+    }
+
     fn vec2(&self, field: &str, v: [f64; 2]) -> Result<[f64; 2], FileError> {
         if v.iter().all(|x| x.is_finite()) {
             Ok(v)
@@ -1021,7 +1046,7 @@ fn converter(ck: &Check<'_>, c: RawConverter, run: &RawRun) -> Result<Converter,
                 "free mode has no clutch, so no shaft load (use mode = \"clutch\")",
             ))
         }
-        Some(l) => ck.load("run.load", ck.non_negative("run.load", l)?)?,
+        Some(l) => ck.converter_load("run.load", ck.non_negative("run.load", l)?)?,
         None => 0.0,
     };
     let motor = match &run.motor {
