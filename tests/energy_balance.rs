@@ -234,7 +234,10 @@ fn a_huge_step_fails_with_the_energy_balance_error() {
 
     // At h = 0.3 s the 16 sub-steps reach the step's end, off the balance by 3.8e-4 of
     // the energy scale (host-sim's `five-bar --h 0.3`): the message names the division.
-    let mut sim = five_bar::<f64>().unwrap().simulation_with_step(0.3).unwrap();
+    let mut sim = five_bar::<f64>()
+        .unwrap()
+        .simulation_with_step(0.3)
+        .unwrap();
     let e = sim.step().unwrap_err();
     let StepError::EnergyBalance { substeps, .. } = e else {
         panic!("not the energy-balance error: {e}");

@@ -286,9 +286,15 @@ impl fmt::Display for StepError {
                 if *substeps > 1 {
                     write!(f, "even divided into {substeps} sub-steps")?;
                 } else {
-                    write!(f, "undivided, and no division into sub-steps reached the step's end")?;
+                    write!(
+                        f,
+                        "undivided, and no division into sub-steps reached the step's end"
+                    )?;
                 }
-                write!(f, ": the step is too large for the motion; take a smaller step")
+                write!(
+                    f,
+                    ": the step is too large for the motion; take a smaller step"
+                )
             }
         }
     }

@@ -338,7 +338,10 @@ fn converter_loads_keep_the_clutch_rules() {
     for load in ["1e6", "1e7", "1e11"] {
         let (code, _, err) = run(&["run", "ccc-s2", "--load", load, "--quiet"]);
         assert_eq!(code, 2, "{load}: {err}");
-        assert!(err.contains("--load") && err.contains("negative torque"), "{err}");
+        assert!(
+            err.contains("--load") && err.contains("negative torque"),
+            "{err}"
+        );
     }
     let dir = TempDir::new("figures-converter-load");
     let text = host_sim::ScenarioId::CccS2
@@ -351,19 +354,24 @@ fn converter_loads_keep_the_clutch_rules() {
     assert!(err.contains("run.load") && err.contains("2e7"), "{err}");
     for load in [1e3, 9.9e5] {
         let arg = format!("{load}");
-        let (code, _, err, csv) =
-            run_to_csv(&dir, &["ccc-s2", "--load", &arg, "--t-end", "0.1"]);
+        let (code, _, err, csv) = run_to_csv(&dir, &["ccc-s2", "--load", &arg, "--t-end", "0.1"]);
         assert_eq!(code, 0, "{load}: {err}");
         // The converter's CSV has text columns (mode, coords): read c6 and c8 only.
-        let mut lines = csv.lines();
-        let names: Vec<&str> = lines.next().expect("a header").split(',').collect();
+        let header = csv.lines().next().expect("a header");
+        let names: Vec<&str> = header.split(',').collect();
         let tol = 1e-9 * (load + 1.0);
         for c in ["c6", "c8"] {
             let k = names.iter().position(|n| *n == c).expect("a clutch column");
             let low = csv
                 .lines()
                 .skip(1)
-                .map(|l| l.split(',').nth(k).expect("a field").parse::<f64>().expect("a number"))
+                .map(|l| {
+                    l.split(',')
+                        .nth(k)
+                        .expect("a field")
+                        .parse::<f64>()
+                        .expect("a number")
+                })
                 .fold(f64::INFINITY, f64::min);
             assert!(low >= -tol, "T_r = {load}: {c} down to {low} N·m");
         }

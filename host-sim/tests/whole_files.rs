@@ -165,7 +165,14 @@ fn two_outputs_that_are_one_file_are_refused() {
     let again = format!("{}/./a.svg", dir.path.display());
     for (out, animate) in [(&first, &first), (&first, &again)] {
         let (code, _, err) = common::run(&[
-            "run", "five-bar", "--t-end", "0.01", "--out", out, "--animate", animate,
+            "run",
+            "five-bar",
+            "--t-end",
+            "0.01",
+            "--out",
+            out,
+            "--animate",
+            animate,
         ]);
         assert_eq!(code, 2, "{err}");
         assert!(err.contains("are one file"), "{err}");
@@ -174,7 +181,14 @@ fn two_outputs_that_are_one_file_are_refused() {
     // Not there yet: refused all the same, and nothing is written.
     let fresh = dir.join("b.gif");
     let (code, _, err) = common::run(&[
-        "run", "five-bar", "--t-end", "0.01", "--out", &fresh, "--animate", &fresh,
+        "run",
+        "five-bar",
+        "--t-end",
+        "0.01",
+        "--out",
+        &fresh,
+        "--animate",
+        &fresh,
     ]);
     assert_eq!(code, 2, "{err}");
     assert!(!Path::new(&fresh).exists(), "{err}");
