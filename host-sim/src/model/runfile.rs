@@ -860,33 +860,46 @@ impl Check<'_> {
 
     /// A load (N·m or N): finite and below [`MAX_LOAD`] in magnitude.
     fn load(&self, field: &str, x: f64) -> Result<f64, FileError> {
-        self.finite(field, x)?;
-        if x.abs() < MAX_LOAD {
-            Ok(x)
-        } else {
-            Err(self.err(
-                field,
-                format!(
-                    "{} is too large: from {} on the energy and clutch tolerances lose their meaning",
-                    Sci(x),
-                    Sci(MAX_LOAD)
-                ),
-            ))
-        }
+        self.below(
+            field,
+            x,
+            MAX_LOAD,
+            "",
+            "the energy and clutch tolerances lose their meaning",
+        )
     }
 
     /// The converter's load torque T_r (N·m): finite and below [`MAX_CONVERTER_LOAD`].
     fn converter_load(&self, field: &str, x: f64) -> Result<f64, FileError> {
+        self.below(
+            field,
+            x,
+            MAX_CONVERTER_LOAD,
+            " N·m",
+            "the clutch tolerance 1e-9 (T_r + 1 N·m) lets a locked lever hold a negative torque past 1e-3 N·m and releases it late",
+        )
+    }
+
+    /// `x` finite and below `bound` in magnitude, else an error saying `why` (`unit`
+    /// follows the numbers).
+    fn below(
+        &self,
+        field: &str,
+        x: f64,
+        bound: f64,
+        unit: &str,
+        why: &str,
+    ) -> Result<f64, FileError> {
         self.finite(field, x)?;
-        if x.abs() < MAX_CONVERTER_LOAD {
+        if x.abs() < bound {
             Ok(x)
         } else {
             Err(self.err(
                 field,
                 format!(
-                    "{} N·m is too large: from {} N·m on the clutch tolerance 1e-9 (T_r + 1 N·m) lets a locked lever hold a negative torque past 1e-3 N·m and releases it late",
+                    "{}{unit} is too large: from {}{unit} on {why}",
                     Sci(x),
-                    Sci(MAX_CONVERTER_LOAD)
+                    Sci(bound)
                 ),
             ))
         }
