@@ -227,9 +227,36 @@ fn a_huge_step_fails_with_the_energy_balance_error() {
         "{residual} J, {scale} J"
     );
     assert!(e.to_string().contains("smaller step"), "{e}");
+    assert_reads(&e, substeps);
     assert_eq!(snapshot(&sim), before);
     // Stepping on with a sane step is still possible from the kept state.
     assert!(sim.kinetostatics().is_ok());
+
+    // At h = 0.3 s the 16 sub-steps reach the step's end, off the balance by 3.8e-4 of
+    // the energy scale (host-sim's `five-bar --h 0.3`): the message names the division.
+    let mut sim = five_bar::<f64>()
+        .unwrap()
+        .simulation_with_step(0.3)
+        .unwrap();
+    let e = sim.step().unwrap_err();
+    let StepError::EnergyBalance { substeps, .. } = e else {
+        panic!("not the energy-balance error: {e}");
+    };
+    assert_eq!(substeps, 16, "{e}");
+    assert_reads(&e, substeps);
+}
+
+/// The energy-balance error is a sentence that says which division of the step its
+/// residual is of (the finest that reached the step's end, or none), in words.
+fn assert_reads(e: &StepError, substeps: u32) {
+    let text = e.to_string();
+    let division = if substeps > 1 {
+        format!("even divided into {substeps} sub-steps: ")
+    } else {
+        "undivided, and no division into sub-steps reached the step's end: ".to_string()
+    };
+    assert!(text.contains(&division), "{text}");
+    assert!(!text.contains("(the residual of"), "{text}");
 }
 
 /// Random crank-rockers (Grashof, crank shortest), random masses, constant motors of

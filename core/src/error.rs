@@ -274,12 +274,28 @@ impl fmt::Display for StepError {
                 residual,
                 scale,
                 substeps,
-            } => write!(
-                f,
-                "t = {} s: one step breaks the energy balance by {residual:.3e} J ({:.1e} of the energy scale {scale:.3e} J) even in sub-steps (the residual of {substeps}): the step is too large for the motion; take a smaller step",
-                Time(*time),
-                residual.abs() / scale
-            ),
+            } => {
+                write!(
+                    f,
+                    "t = {} s: one step breaks the energy balance by {residual:.3e} J ({:.1e} of the energy scale {scale:.3e} J) ",
+                    Time(*time),
+                    residual.abs() / scale
+                )?;
+                // `substeps` is the division this residual is of: 1 when no finer
+                // division reached the step's end.
+                if *substeps > 1 {
+                    write!(f, "even divided into {substeps} sub-steps")?;
+                } else {
+                    write!(
+                        f,
+                        "undivided, and no division into sub-steps reached the step's end"
+                    )?;
+                }
+                write!(
+                    f,
+                    ": the step is too large for the motion; take a smaller step"
+                )
+            }
         }
     }
 }

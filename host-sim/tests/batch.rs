@@ -287,6 +287,15 @@ fn an_end_at_a_singularity_has_one_exit_status() {
             ("0", "singularity"),
             "{args:?}"
         );
+        // The message says how it ended, as the run's summary does: not "failed".
+        let message = row[col("message")];
+        assert!(!message.contains("failed"), "{args:?}: {message}");
+        if args[0] != four_bar {
+            assert!(
+                message.starts_with("\"at the mechanism's singularity: "),
+                "{args:?}: {message}"
+            );
+        }
         let alone = tmp.join("alone.csv");
         let mut cmd = vec!["run"];
         cmd.extend(args.iter().copied());

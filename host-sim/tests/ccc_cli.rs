@@ -581,3 +581,19 @@ fn help_describes_the_converter_scenarios() {
         assert!(out.contains(needle), "help lacks {needle}");
     }
 }
+
+/// A run that ends held in jam (both levers locked, the shaft stopped: no coordinate
+/// moves) says so in words in its summary's `final` line. At T_r = 1e5 N·m the shaft,
+/// set turning by the catch at 0.0666 s, stops at 0.0696 s and the converter jams.
+#[test]
+fn a_run_ending_in_jam_says_the_linkage_is_held() {
+    let (code, out, err) = run(&[
+        "run", "ccc-s2", "--load", "1e5", "--t-end", "0.075", "--out", "-",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(!out.is_empty());
+    assert!(
+        err.contains("final     mode jam (no coordinates: the linkage is held) at t = 0.075"),
+        "{err}"
+    );
+}

@@ -302,3 +302,78 @@ fn tiny_figures_have_exponents() {
     let k = number_after(&summary, "end ");
     assert!(k > 0.0 && k < 1e-6, "K(2 µs) = {k}\n{summary}");
 }
+
+/// The summary's switch lines read as sentences: one switch is "1 change", and a
+/// switch back to the first coordinates says so instead of a `-` for the group.
+/// `stretched-four-bar.toml` switches once (at t = 0.853 s), `crank-triad.toml`
+/// switches away and back twice each in its first 1.1 s (at 0.455, 0.593, 0.992, 1.083 s).
+#[test]
+fn switch_lines_read() {
+    let mechanisms = concat!(env!("CARGO_MANIFEST_DIR"), "/mechanisms");
+    let one = format!("{mechanisms}/stretched-four-bar.toml");
+    let (code, _, summary) = run(&["run", &one, "--out", "-"]);
+    assert_eq!(code, 0, "{summary}");
+    assert!(
+        summary.contains("switches  1 change of coordinates"),
+        "{summary}"
+    );
+    let triad = format!("{mechanisms}/crank-triad.toml");
+    let (code, _, summary) = run(&["run", &triad, "--t-end", "1.1", "--out", "-"]);
+    assert_eq!(code, 0, "{summary}");
+    assert!(summary.contains("switches  4 changes"), "{summary}");
+    assert!(
+        summary.contains("(back to the first coordinates: conditioning "),
+        "{summary}"
+    );
+    assert!(!summary.contains("(- at"), "{summary}");
+}
+
+/// The converter's load torque is refused from 1e6 N·m on, on the command line and in
+/// a run file: the twin's clutch tolerance, 1e-9 (T_r + 1 N·m), would let a locked
+/// lever hold a negative torque (S2 at T_r = 1e7 N·m had c8 = -7.4e-3 N·m in its CSV,
+/// at 1e11 -98 N·m). Below the bound the clutch rule holds in every row: c6, c8 ≥ 0
+/// to that tolerance (1e-3 N·m at most).
+#[test]
+fn converter_loads_keep_the_clutch_rules() {
+    for load in ["1e6", "1e7", "1e11"] {
+        let (code, _, err) = run(&["run", "ccc-s2", "--load", load, "--quiet"]);
+        assert_eq!(code, 2, "{load}: {err}");
+        assert!(
+            err.contains("--load") && err.contains("negative torque"),
+            "{err}"
+        );
+    }
+    let dir = TempDir::new("figures-converter-load");
+    let text = host_sim::ScenarioId::CccS2
+        .file_text()
+        .replace("load = 800.0", "load = 2e7");
+    assert!(text.contains("load = 2e7"));
+    let file = write(&dir, "heavy.toml", &text);
+    let (code, _, err) = run(&["run", &file, "--quiet"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("run.load") && err.contains("2e7"), "{err}");
+    for load in [1e3, 9.9e5] {
+        let arg = format!("{load}");
+        let (code, _, err, csv) = run_to_csv(&dir, &["ccc-s2", "--load", &arg, "--t-end", "0.1"]);
+        assert_eq!(code, 0, "{load}: {err}");
+        // The converter's CSV has text columns (mode, coords): read c6 and c8 only.
+        let header = csv.lines().next().expect("a header");
+        let names: Vec<&str> = header.split(',').collect();
+        let tol = 1e-9 * (load + 1.0);
+        for c in ["c6", "c8"] {
+            let k = names.iter().position(|n| *n == c).expect("a clutch column");
+            let low = csv
+                .lines()
+                .skip(1)
+                .map(|l| {
+                    l.split(',')
+                        .nth(k)
+                        .expect("a field")
+                        .parse::<f64>()
+                        .expect("a number")
+                })
+                .fold(f64::INFINITY, f64::min);
+            assert!(low >= -tol, "T_r = {load}: {c} down to {low} N·m");
+        }
+    }
+}

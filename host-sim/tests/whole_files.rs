@@ -8,6 +8,7 @@
 mod common;
 
 use common::{numeric_csv, TempDir};
+use std::path::Path;
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
@@ -151,6 +152,27 @@ fn an_output_that_names_the_run_file_is_refused() {
         assert!(err.contains("is the run file itself"), "{err}");
         assert_eq!(std::fs::read_to_string(&file).unwrap(), text, "{flag}");
     }
+}
+
+/// Two outputs that are one file (`--out a.svg --animate a.svg`, however spelled) are
+/// refused before anything is written: the animation would overwrite the CSV. A file
+/// already there is left as it was.
+#[test]
+fn two_outputs_that_are_one_file_are_refused() {
+    let dir = TempDir::new("whole-twice");
+    let first = dir.join("a.svg");
+    std::fs::write(&first, "kept").unwrap();
+    let again = format!("{}/./a.svg", dir.path.display());
+    // Not there yet (b.gif): refused all the same, and nothing is written.
+    let fresh = dir.join("b.gif");
+    for (out, animate) in [(&first, &first), (&first, &again), (&fresh, &fresh)] {
+        let args = ["run", "five-bar", "--t-end", "0.01", "--out", out];
+        let (code, _, err) = common::run(&[&args[..], &["--animate", animate]].concat());
+        assert_eq!(code, 2, "{err}");
+        assert!(err.contains("are one file"), "{err}");
+        assert_eq!(std::fs::read_to_string(&first).unwrap(), "kept");
+    }
+    assert!(!Path::new(&fresh).exists());
 }
 
 /// With `stderr` a pipe (not a terminal), a run prints no progress line: `stderr`

@@ -175,6 +175,10 @@ impl Outcome {
             Outcome::Converter(Ok(s)) => match &s.end {
                 End::Completed => None,
                 End::Interrupted => Some("interrupted (SIGINT or SIGTERM)".to_string()),
+                End::Stopped {
+                    error,
+                    expected: true,
+                } => Some(format!("at the mechanism's singularity: {error}")),
                 End::Stopped { error, .. } => Some(format!("step {} failed: {error}", s.steps + 1)),
             },
             Outcome::Mechanism(Err(e)) | Outcome::Converter(Err(e)) => Some(e.to_string()),

@@ -12,6 +12,8 @@
 //!
 //! Every error names the file, the line (from 1, the header's is 1) and the column.
 
+use super::runfile::MAX_CONVERTER_LOAD;
+use crate::error::Sci;
 use std::fmt;
 use std::path::Path;
 use structomat::ccc::{EventKind, Mode};
@@ -90,7 +92,7 @@ impl fmt::Display for LogError {
 impl std::error::Error for LogError {}
 
 /// A bench log, validated: at least two samples, t strictly increasing and uniform from
-/// 0, every value finite, the counts whole numbers, the load ≥ 0.
+/// 0, every value finite, the counts whole numbers, 0 ≤ the load < [`MAX_CONVERTER_LOAD`].
 #[derive(Clone, Debug, PartialEq)]
 pub struct BenchLog {
     /// The file's path (or the name given to its text).
@@ -160,6 +162,14 @@ impl BenchLog {
             if load < 0.0 {
                 return Err(at(2).err(format!(
                     "{load} N·m is negative (the brake's set point T_r >= 0)"
+                )));
+            }
+            if load >= MAX_CONVERTER_LOAD {
+                return Err(at(2).err(format!(
+                    "{} N·m is too large: the twin's clutch tolerances lose their meaning \
+                     from {} N·m",
+                    Sci(load),
+                    Sci(MAX_CONVERTER_LOAD)
                 )));
             }
             log.load.push(load);

@@ -34,6 +34,14 @@ use structomat::{ModelError, Real};
 /// then far coarser than the mechanism's own energies and torques.
 pub const MAX_LOAD: f64 = 1e12;
 
+/// The converter's load torque T_r (N·m) from which on a run is refused: the twin
+/// releases a locked lever when its clutch torque falls below -1e-9 (T_r + 1 N·m)
+/// (`structomat::ccc`'s torque tolerance), so from 1e6 N·m on an accepted state may
+/// hold a clutch torque below -1e-3 N·m and a release comes late by that tolerance
+/// over the torque's rate (S2 at T_r = 1e7: c8 = -7.4e-3 N·m, the release 5e-5 s
+/// late; at 1e11, -98 N·m), far coarser than the converter's own torques.
+pub const MAX_CONVERTER_LOAD: f64 = 1e6;
+
 /// A bad run file: which file, where (when the toml parser knows), which field, what is
 /// wrong. Displayed as `FILE[:LINE:COLUMN]: FIELD: MESSAGE`.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -852,16 +860,46 @@ impl Check<'_> {
 
     /// A load (N·m or N): finite and below [`MAX_LOAD`] in magnitude.
     fn load(&self, field: &str, x: f64) -> Result<f64, FileError> {
+        self.below(
+            field,
+            x,
+            MAX_LOAD,
+            "",
+            "the energy and clutch tolerances lose their meaning",
+        )
+    }
+
+    /// The converter's load torque T_r (N·m): finite and below [`MAX_CONVERTER_LOAD`].
+    fn converter_load(&self, field: &str, x: f64) -> Result<f64, FileError> {
+        self.below(
+            field,
+            x,
+            MAX_CONVERTER_LOAD,
+            " N·m",
+            "the clutch tolerance 1e-9 (T_r + 1 N·m) lets a locked lever hold a negative torque past 1e-3 N·m and releases it late",
+        )
+    }
+
+    /// `x` finite and below `bound` in magnitude, else an error saying `why` (`unit`
+    /// follows the numbers).
+    fn below(
+        &self,
+        field: &str,
+        x: f64,
+        bound: f64,
+        unit: &str,
+        why: &str,
+    ) -> Result<f64, FileError> {
         self.finite(field, x)?;
-        if x.abs() < MAX_LOAD {
+        if x.abs() < bound {
             Ok(x)
         } else {
             Err(self.err(
                 field,
                 format!(
-                    "{} is too large: from {} on the energy and clutch tolerances lose their meaning",
+                    "{}{unit} is too large: from {}{unit} on {why}",
                     Sci(x),
-                    Sci(MAX_LOAD)
+                    Sci(bound)
                 ),
             ))
         }
@@ -1021,7 +1059,7 @@ fn converter(ck: &Check<'_>, c: RawConverter, run: &RawRun) -> Result<Converter,
                 "free mode has no clutch, so no shaft load (use mode = \"clutch\")",
             ))
         }
-        Some(l) => ck.load("run.load", ck.non_negative("run.load", l)?)?,
+        Some(l) => ck.converter_load("run.load", ck.non_negative("run.load", l)?)?,
         None => 0.0,
     };
     let motor = match &run.motor {

@@ -11,7 +11,7 @@ use super::{
 };
 use crate::error::{usage_err, Sci, UsageError};
 use crate::model::bench::{BenchLog, ClutchLog};
-use crate::model::runfile::MAX_LOAD;
+use crate::model::runfile::MAX_CONVERTER_LOAD;
 use crate::model::scenarios::{ScenarioId, Source};
 use clap::{Args, Parser};
 use std::path::PathBuf;
@@ -500,11 +500,12 @@ fn parse_load(value: &str) -> Result<f64, UsageError> {
             "--load: {value} is negative ({what} expected)"
         )));
     }
-    if x >= MAX_LOAD {
+    if x >= MAX_CONVERTER_LOAD {
         return Err(usage_err(format!(
-            "--load: {value} N·m is too large: from {} N·m on the energy and clutch \
-             tolerances lose their meaning ({what} below that expected)",
-            Sci(MAX_LOAD)
+            "--load: {value} N·m is too large: from {} N·m on the clutch tolerance \
+             1e-9 (T_r + 1 N·m) lets a locked lever hold a negative torque past 1e-3 N·m \
+             and releases it late ({what} below that expected)",
+            Sci(MAX_CONVERTER_LOAD)
         )));
     }
     // -0 is 0.

@@ -276,11 +276,15 @@ impl CccSummary {
             "impacts   {} plastic impacts, total loss {:.6e} J",
             self.impacts, a.impact_loss
         )?;
+        // A mode at rest (jam: every lever locked, the shaft held) has no coordinates.
+        let coords = match self.coords {
+            Coordinates::Rest => "no coordinates: the linkage is held".to_string(),
+            c => format!("{c} coordinates"),
+        };
         writeln!(
             f,
-            "final     mode {} ({} coordinates) at t = {} s, shaft angle {} rad",
+            "final     mode {} ({coords}) at t = {} s, shaft angle {} rad",
             self.mode,
-            self.coords,
             Fig(self.time),
             Fig(self.shaft_angle)
         )?;

@@ -290,16 +290,25 @@ impl fmt::Display for Summary {
             writeln!(f, "warning   {w}")?;
         }
         if !self.switches.is_empty() {
+            let n = self.switches.len();
             writeln!(
                 f,
-                "switches  {} changes of coordinates at dead points of the drivers (the CSV stays in the first coordinates and columns throughout):",
-                self.switches.len()
+                "switches  {n} {} of coordinates at dead points of the drivers (the CSV stays in the first coordinates and columns throughout):",
+                if n == 1 { "change" } else { "changes" }
             )?;
             for s in &self.switches {
+                write!(f, "          t = {:.6} s: {} -> {} (", s.time, s.from, s.to)?;
+                // The conditioning is the worst group's (a dyad's |sin| of its
+                // transmission angle): before the switch, then after it.
+                if s.group == "-" {
+                    write!(f, "back to the first coordinates: ")?;
+                } else {
+                    write!(f, "{} at ", s.group)?;
+                }
                 writeln!(
                     f,
-                    "          t = {:.6} s: {} -> {} ({} at {:.3e}, then {:.3e})",
-                    s.time, s.from, s.to, s.group, s.conditioning[0], s.conditioning[1]
+                    "conditioning {:.3e}, then {:.3e})",
+                    s.conditioning[0], s.conditioning[1]
                 )?;
             }
         }

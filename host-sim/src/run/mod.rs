@@ -183,21 +183,33 @@ pub fn run_quiet(opts: &RunOptions) -> Result<Report, RunError> {
 
 /// Refuses, before anything is written, an output path of `opts` (`--out` and a
 /// converter's logs next to it, `--plot`, `--animate`) that names its input, the run
-/// file: the run would overwrite the model it runs.
+/// file: the run would overwrite the model it runs; and two output files that are one
+/// file (`--out a.svg --animate a.svg`): the second would overwrite the first.
 pub fn refuse_inputs(opts: &RunOptions) -> Result<(), RunError> {
+    let mut files: Vec<PathBuf> = opts.animate.clone();
+    if let Output::File(out) = &opts.out {
+        files.push(out.clone());
+        if opts.scenario.is_converter() {
+            let (events, switches) = log_paths(out);
+            files.extend([events, switches]);
+        }
+    }
+    let places: Vec<PathBuf> = files.iter().map(|p| place(p)).collect();
+    for (k, a) in places.iter().enumerate() {
+        if let Some(j) = places[..k].iter().position(|b| b == a) {
+            return Err(RunError::Usage(crate::error::usage_err(format!(
+                "the outputs {} and {} are one file: the second would overwrite the \
+                 first; name two files",
+                files[j].display(),
+                files[k].display()
+            ))));
+        }
+    }
     let Source::File { path: input, .. } = &opts.scenario else {
         return Ok(());
     };
-    let mut outputs: Vec<PathBuf> = opts.animate.clone();
-    outputs.extend(opts.plot.clone());
-    if let Output::File(out) = &opts.out {
-        outputs.push(out.clone());
-        if opts.scenario.is_converter() {
-            let (events, switches) = log_paths(out);
-            outputs.extend([events, switches]);
-        }
-    }
-    match overwritten(&[Path::new(input)], &outputs) {
+    files.extend(opts.plot.clone());
+    match overwritten(&[Path::new(input)], &files) {
         Some((p, _)) => Err(RunError::Usage(crate::error::usage_err(format!(
             "the output {} is the run file itself: the run would overwrite its model; \
              name another file",
@@ -224,6 +236,22 @@ pub fn overwritten<'a, 'b>(
             .find(|(c, _)| *c == o_canon)
             .map(|(_, input)| (o, *input))
     })
+}
+
+/// Where `path` will be written: the file itself when it exists (links followed),
+/// else its folder's canonical path joined with its name, else `path` as given.
+fn place(path: &Path) -> PathBuf {
+    if let Ok(p) = path.canonicalize() {
+        return p;
+    }
+    let folder = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    match (folder.canonicalize(), path.file_name()) {
+        (Ok(d), Some(name)) => d.join(name),
+        _ => path.to_path_buf(),
+    }
 }
 
 /// Runs `host-sim run` with `opts`: the CSV to the file (with a converter's logs next
