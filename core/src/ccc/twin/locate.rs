@@ -211,15 +211,9 @@ impl<T: Real> Twin<T> {
         // closer than that, their signs are noise and only the evaluation cap ends the
         // iteration. f64 at S2's events: under 1e-11, so THETA_TOL decides.
         let floor = self.fired_noise(fired, inputs);
-        let ulps_tol = T::c(THETA_TOL).max(T::EPS * T::c(8.0));
-        let noise_tol = noise_theta(floor, ghi - glo);
-        let tol = ulps_tol.max(noise_tol);
-        // When the rounding floor sets the tolerance (f32), a point past the crossing
-        // whose function is within the floor is located: the crossing is within
-        // floor / slope ≈ `tol` before it, and closer points' signs are noise. S2 in
-        // f32 at h = 1 ms: the release at 0.2629 s landed its second point 0.18 N·m past
-        // (floor 0.21 N·m) and spent 3 more full evaluations on the noise.
-        let settled = (noise_tol > ulps_tol).then_some(floor);
+        let tol = T::c(THETA_TOL)
+            .max(T::EPS * T::c(8.0))
+            .max(noise_theta(floor, ghi - glo));
         // Two points this close to each other bracket... or not, but their secant
         // places the crossing to about near²·|g''/g'| (θ units), 1e-10 in f64 for a
         // curvature |g''/g'| of 1 per step: far below `tol`.
@@ -276,7 +270,7 @@ impl<T: Real> Twin<T> {
             at_hi = g > T::zero();
             let crossing = crossing_estimate((th, g), last, trusted, near);
             last = Some((th, g));
-            if b.update(th, g, k, crossing, tol, settled) {
+            if b.update(th, g, k, crossing, tol) {
                 break;
             }
             // Next: aim just past the secant's crossing.
@@ -446,17 +440,8 @@ impl<T: Real> Bracket<T> {
     /// Takes the point `th` with its event function `g` (the largest fired, `k`) into
     /// the bracket; returns whether the crossing is located: `th` is past it by at most
     /// `tol` of the estimate `crossing`, though no point on the other side is that
-    /// close (`lo` becomes the estimate, for the log), or, with the rounding floor
-    /// `settled` of the functions (when it sets the tolerance), `g` is within it.
-    fn update(
-        &mut self,
-        th: T,
-        g: T,
-        k: Guard,
-        crossing: Option<T>,
-        tol: T,
-        settled: Option<T>,
-    ) -> bool {
+    /// close (`lo` becomes the estimate, for the log).
+    fn update(&mut self, th: T, g: T, k: Guard, crossing: Option<T>, tol: T) -> bool {
         if g > T::zero() {
             self.hi = th;
             self.ghi = g;
@@ -465,9 +450,6 @@ impl<T: Real> Bracket<T> {
                 self.glo *= T::c(0.5);
             }
             self.side = 1;
-            if settled.is_some_and(|floor| g <= floor) {
-                return true;
-            }
             if let Some(r) = crossing.filter(|r| th - *r <= tol && *r >= self.lo) {
                 self.lo = r;
                 return true;
