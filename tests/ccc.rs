@@ -662,6 +662,41 @@ fn s2_events_converge_with_the_step() {
     assert!((x - y).abs() < 1e-5, "first breakaway {x} vs {y}");
 }
 
+/// Issue 18's loop step: S2's second in f64 at h = 1 ms (the Cortex-M7's budget run,
+/// whose energy check redoes steps in 2, 3 or 4 sub-steps) against h = 1e-4 s, its
+/// reference step (itself within 1e-4 s of 5e-5 s above): the same events in the same
+/// order, each within 1e-4 s, the audit under 1e-6 of the motor's work at every step,
+/// and SPEC 3's laws at every step (`run`).
+#[test]
+fn s2_at_the_loop_step_keeps_the_events_and_the_audit() {
+    let a = s2(1e-4, 1.0, DriveDirection::Cw);
+    let b = run(
+        CccParams::reference(),
+        TwinSettings::reference(1e-3),
+        s2_inputs(),
+        1.0,
+    );
+    assert!(b.end.is_none(), "{:?}", b.end);
+    assert!(
+        b.max_rel_residual < 1e-6,
+        "audit residual {:.3e}",
+        b.max_rel_residual
+    );
+    let key = |r: &Run| -> Vec<(EventKind, Mode, f64)> {
+        r.events.iter().map(|e| (e.kind, e.to, e.time)).collect()
+    };
+    let (ka, kb) = (key(&a), key(&b));
+    assert_eq!(ka.len(), kb.len(), "{ka:?} vs {kb:?}");
+    for (x, y) in ka.iter().zip(kb.iter()) {
+        assert_eq!(
+            (x.0, x.1),
+            (y.0, y.1),
+            "event sequences differ: {ka:?} vs {kb:?}"
+        );
+        assert!((x.2 - y.2).abs() < 1e-4, "{x:?} vs {y:?}");
+    }
+}
+
 /// S1 (free, 12 N·m, no load): ends at a singularity of the mechanism before 0.6 s, with
 /// an error naming the diode's groups and the time; nothing is NaN before it.
 #[test]
