@@ -198,8 +198,8 @@ impl<T: Real> Equilibrium<T> {
         // out (each solved at that size: no padding to unroll); a group whose reduced
         // system is larger is solved dense.
         let reduced = match links {
-            0..=4 => self.reduced::<6, 3>(g),
-            _ => self.reduced::<8, 4>(g),
+            0..=4 => self.reduced(g, Sizes { whole: 6, small: 3 }),
+            _ => self.reduced(g, Sizes { whole: 8, small: 4 }),
         };
         reduced.unwrap_or_else(|| match links {
             0..=2 => self.dense::<6>(g),
@@ -320,14 +320,18 @@ impl<T: Real> Equilibrium<T> {
     /// inner joint only (the moment about a binary link's outer joint, or about a
     /// rod's eliminated end) leaves that joint one unknown `μ` (see [`Param`]): 3 of
     /// the triad's 6 rows, 4 of the six-link group's 8 are of this kind, and the
-    /// system left is 3 × 3 and 4 × 4 (`≤ R`; else none is taken out and the system
-    /// is solved whole, at `N`). Then the rods' joints, then the outer joints,
+    /// system left is 3 × 3 and 4 × 4 (`≤ small`; else none is taken out and the system
+    /// is solved whole, at `whole`). Then the rods' joints, then the outer joints,
     /// `W_o λ_o = -L - Σ (the inner reactions' wrenches)`. `None` if the group is not
     /// of this shape (the dense system then solves it), `Some(false)` if it is
     /// singular (a one-joint row of zeros leaves non-finite values instead, which
     /// [`reactions`] reports alike).
     #[inline(never)]
-    fn reduced<const N: usize, const R: usize>(&mut self, g: &Group<T>) -> Option<bool> {
+    fn reduced(&mut self, g: &Group<T>, size: Sizes) -> Option<bool> {
+        // One copy of this function for both shapes (its structural part is the bulk of
+        // the code): the system is assembled at the largest size and solved at the
+        // shape's own (`solve_at`), the same sizes, hence the same bits, as before.
+        let Sizes { whole, small } = size;
         let links = g.placements.len();
         let nj = g.joints.len();
         // Per joint: its link `i`'s index, its other body's (`None`: an earlier body),
@@ -441,7 +445,7 @@ impl<T: Real> Equilibrium<T> {
             }
         }
         // Columns: the kept inner joints' unknowns (one, `μ`, for a parametrized
-        // joint). The parametrization pays when it leaves a system of at most `R`
+        // joint). The parametrization pays when it leaves a system of at most `small`
         // unknowns; otherwise none is made.
         let mut col = [0; MAX_GROUP_JOINTS];
         let mut m = 0;
@@ -460,7 +464,7 @@ impl<T: Real> Equilibrium<T> {
                     m += if pk.is_some() { 1 } else { u.n };
                 }
             }
-            if m <= R || pass == 1 {
+            if m <= small || pass == 1 {
                 break;
             }
             par = [None; MAX_GROUP_JOINTS];
@@ -494,7 +498,7 @@ impl<T: Real> Equilibrium<T> {
                 (false, _) => 3,
             };
         }
-        if rows != m || m > N {
+        if rows != m || m > whole {
             return None;
         }
         // The parametrized joints: `λ_k = t + μ d` from their link's row.
@@ -546,8 +550,8 @@ impl<T: Real> Equilibrium<T> {
         // `A x = b`: per link's kept rows, `-L` and the kept inner joints' wrench
         // columns (`+W` on the joint's link `i`, `-W` on the other), and each rod's
         // eliminated joint substituted into its other link.
-        let mut a = [[T::zero(); N]; N];
-        let mut b = [T::zero(); N];
+        let mut a = [[T::zero(); REDUCED_MAX]; REDUCED_MAX];
+        let mut b = [T::zero(); REDUCED_MAX];
         // A wrench's entries in a link's kept rows (from its first): `n · v`, or `v`.
         let project = |n: Option<&Vector3<T>>, v: &Vector3<T>| match n {
             Some(n) => ([n.dot(v), T::zero(), T::zero()], 1),
@@ -564,7 +568,7 @@ impl<T: Real> Equilibrium<T> {
         }
         // Where kept joint `k`'s unknown `c` goes (see `put`).
         let target = |k: usize, c: usize| {
-            let c0 = col.get(k).copied().unwrap_or(N);
+            let c0 = col.get(k).copied().unwrap_or(REDUCED_MAX);
             match param.get(k) {
                 Some(pm) if pm.on => (c0, Some(pm.at(c))),
                 _ => (c0 + c, None),
@@ -616,39 +620,16 @@ impl<T: Real> Equilibrium<T> {
                 }
             }
         }
-        // Solved at a constant size (`R` if it fits, else `N`), rows and columns past
-        // `m` as identity: the elimination then unrolls and bounds-checks once (half
-        // the instructions of a run-time size); the padding neither pivots (zero in the
-        // live columns) nor changes a live entry (`x - f · 0`).
-        if m <= R {
-            let mut sa = [[T::zero(); R]; R];
-            let mut sb = [T::zero(); R];
-            for (((r, srow), sx), (row, x)) in
-                sa.iter_mut().enumerate().zip(&mut sb).zip(a.iter().zip(&b))
-            {
-                for (y, v) in srow.iter_mut().zip(row) {
-                    *y = *v;
-                }
-                *sx = *x;
-                if let (true, Some(e)) = (r >= m, srow.get_mut(r)) {
-                    *e = T::one();
-                }
-            }
-            if !crate::linalg::solve_in_place(&mut sa, &mut sb) {
-                return Some(false);
-            }
-            for (x, v) in b.iter_mut().zip(sb) {
-                *x = v;
-            }
-        } else {
-            for (r, row) in a.iter_mut().enumerate().skip(m) {
-                if let Some(e) = row.get_mut(r) {
-                    *e = T::one();
-                }
-            }
-            if !crate::linalg::solve_in_place(&mut a, &mut b) {
-                return Some(false);
-            }
+        // Solved at a constant size (`small` if it fits, else `whole`): see `solve_at`.
+        let size = if m <= small { small } else { whole };
+        let solved = match size {
+            0..=3 => solve_at::<T, 3>(&a, &mut b, m),
+            4 => solve_at::<T, 4>(&a, &mut b, m),
+            5..=6 => solve_at::<T, 6>(&a, &mut b, m),
+            _ => solve_at::<T, REDUCED_MAX>(&a, &mut b, m),
+        };
+        if !solved {
+            return Some(false);
         }
         // The kept inner joints' unknowns, then the rods' eliminated ones.
         for ((u, ((_, j), r)), ((f0, c0), pm)) in self
@@ -774,6 +755,53 @@ impl<T: Real> Equilibrium<T> {
         }
         true
     }
+}
+
+/// The largest reduced system (the six-link group's 8 inner unknowns).
+const REDUCED_MAX: usize = 8;
+
+/// The sizes a group's reduced system is solved at: `whole` (≤ [`REDUCED_MAX`]) when
+/// the one-joint rows cannot be taken out, `small` when they are.
+#[derive(Clone, Copy)]
+struct Sizes {
+    whole: usize,
+    small: usize,
+}
+
+/// Solves the leading `m × m` block of `A x = b` at the constant size `S ≥ m`, `x`
+/// into `b`; `false` if it is singular. Rows and columns past `m` are identity: the
+/// elimination then unrolls and bounds-checks once (half the instructions of a
+/// run-time size); the padding neither pivots (zero in the live columns) nor changes a
+/// live entry (`x - f · 0`).
+#[inline(never)]
+fn solve_at<T: Real, const S: usize>(
+    a: &[[T; REDUCED_MAX]; REDUCED_MAX],
+    b: &mut [T; REDUCED_MAX],
+    m: usize,
+) -> bool {
+    let mut sa = [[T::zero(); S]; S];
+    let mut sb = [T::zero(); S];
+    for (((r, srow), sx), (row, x)) in sa
+        .iter_mut()
+        .enumerate()
+        .zip(&mut sb)
+        .zip(a.iter().zip(b.iter()))
+    {
+        for (y, v) in srow.iter_mut().zip(row) {
+            *y = *v;
+        }
+        *sx = *x;
+        if let (true, Some(e)) = (r >= m, srow.get_mut(r)) {
+            *e = T::one();
+        }
+    }
+    if !crate::linalg::solve_in_place(&mut sa, &mut sb) {
+        return false;
+    }
+    for (x, v) in b.iter_mut().zip(sb) {
+        *x = v;
+    }
+    true
 }
 
 /// A kept joint of 2 unknowns whose link's one kept row `a_0 λ_0 + a_1 λ_1 = β` sees
