@@ -14,6 +14,7 @@
 
 pub mod animate;
 pub mod csv;
+pub mod fmu;
 pub mod pictures;
 pub mod plot;
 
