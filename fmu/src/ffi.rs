@@ -150,7 +150,9 @@ pub extern "C" fn fmi2GetVersion() -> FmiString {
 
 /// The directory path of a `file:` URI (`file:///a/b%20c`, `file:/a/b`).
 pub fn uri_path(uri: &str) -> Option<String> {
-    let rest = uri.strip_prefix("file://").or_else(|| uri.strip_prefix("file:"))?;
+    let rest = uri
+        .strip_prefix("file://")
+        .or_else(|| uri.strip_prefix("file:"))?;
     // `file://localhost/a` and `file:///a` both name /a.
     let rest = rest.strip_prefix("localhost").unwrap_or(rest);
     let bytes = rest.as_bytes();
@@ -158,7 +160,9 @@ pub fn uri_path(uri: &str) -> Option<String> {
     let mut k = 0;
     while k < bytes.len() {
         if bytes[k] == b'%' {
-            let hex = bytes.get(k + 1..k + 3).and_then(|h| core::str::from_utf8(h).ok())?;
+            let hex = bytes
+                .get(k + 1..k + 3)
+                .and_then(|h| core::str::from_utf8(h).ok())?;
             out.push(u8::from_str_radix(hex, 16).ok()?);
             k += 3;
         } else {
@@ -220,7 +224,11 @@ pub unsafe extern "C" fn fmi2Instantiate(
         };
         let mut log = c_log(logger, env, &name);
         let refuse = |log: &mut Log, msg: String| {
-            log(Status::Error, "logStatusError", &format!("fmi2Instantiate: {msg}"));
+            log(
+                Status::Error,
+                "logStatusError",
+                &format!("fmi2Instantiate: {msg}"),
+            );
             core::ptr::null_mut()
         };
         if fmu_type != CO_SIMULATION {
@@ -244,7 +252,9 @@ pub unsafe extern "C" fn fmi2Instantiate(
 pub unsafe extern "C" fn fmi2FreeInstance(c: Component) {
     if !c.is_null() {
         // SAFETY: an instance from `fmi2Instantiate`, freed once (FMI 2.0 2.1.5).
-        let _ = catch_unwind(AssertUnwindSafe(|| drop(unsafe { Box::from_raw(c.cast::<Instance>()) })));
+        let _ = catch_unwind(AssertUnwindSafe(|| {
+            drop(unsafe { Box::from_raw(c.cast::<Instance>()) })
+        }));
     }
 }
 
@@ -476,7 +486,11 @@ pub extern "C" fn fmi2SerializedFMUstateSize(
     _state: FmuState,
     _size: *mut usize,
 ) -> Status {
-    unsupported(c, "fmi2SerializedFMUstateSize", "canSerializeFMUstate is false")
+    unsupported(
+        c,
+        "fmi2SerializedFMUstateSize",
+        "canSerializeFMUstate is false",
+    )
 }
 
 #[no_mangle]
@@ -496,7 +510,11 @@ pub extern "C" fn fmi2DeSerializeFMUstate(
     _size: usize,
     _state: *mut FmuState,
 ) -> Status {
-    unsupported(c, "fmi2DeSerializeFMUstate", "canSerializeFMUstate is false")
+    unsupported(
+        c,
+        "fmi2DeSerializeFMUstate",
+        "canSerializeFMUstate is false",
+    )
 }
 
 #[no_mangle]
@@ -509,7 +527,11 @@ pub extern "C" fn fmi2GetDirectionalDerivative(
     _dv_known: *const f64,
     _dv_unknown: *mut f64,
 ) -> Status {
-    unsupported(c, "fmi2GetDirectionalDerivative", "providesDirectionalDerivative is false")
+    unsupported(
+        c,
+        "fmi2GetDirectionalDerivative",
+        "providesDirectionalDerivative is false",
+    )
 }
 
 // ---- Co-Simulation ----
@@ -522,7 +544,11 @@ pub extern "C" fn fmi2SetRealInputDerivatives(
     _order: *const c_int,
     _value: *const f64,
 ) -> Status {
-    unsupported(c, "fmi2SetRealInputDerivatives", "canInterpolateInputs is false")
+    unsupported(
+        c,
+        "fmi2SetRealInputDerivatives",
+        "canInterpolateInputs is false",
+    )
 }
 
 #[no_mangle]
@@ -533,7 +559,11 @@ pub extern "C" fn fmi2GetRealOutputDerivatives(
     _order: *const c_int,
     _value: *mut f64,
 ) -> Status {
-    unsupported(c, "fmi2GetRealOutputDerivatives", "maxOutputDerivativeOrder is 0")
+    unsupported(
+        c,
+        "fmi2GetRealOutputDerivatives",
+        "maxOutputDerivativeOrder is 0",
+    )
 }
 
 #[no_mangle]
@@ -561,7 +591,11 @@ const TERMINATED: c_int = 3;
 
 #[no_mangle]
 pub unsafe extern "C" fn fmi2GetStatus(c: Component, _kind: c_int, _value: *mut Status) -> Status {
-    unsupported(c, "fmi2GetStatus", "fmi2DoStep is synchronous (no pending status)")
+    unsupported(
+        c,
+        "fmi2GetStatus",
+        "fmi2DoStep is synchronous (no pending status)",
+    )
 }
 
 #[no_mangle]
@@ -584,7 +618,11 @@ pub unsafe extern "C" fn fmi2GetIntegerStatus(
     _kind: c_int,
     _value: *mut c_int,
 ) -> Status {
-    unsupported(c, "fmi2GetIntegerStatus", "no Integer status is defined in FMI 2.0")
+    unsupported(
+        c,
+        "fmi2GetIntegerStatus",
+        "no Integer status is defined in FMI 2.0",
+    )
 }
 
 #[no_mangle]
@@ -612,7 +650,11 @@ pub unsafe extern "C" fn fmi2GetStringStatus(
     _kind: c_int,
     _value: *mut FmiString,
 ) -> Status {
-    unsupported(c, "fmi2GetStringStatus", "fmi2DoStep never returns fmi2Pending")
+    unsupported(
+        c,
+        "fmi2GetStringStatus",
+        "fmi2DoStep never returns fmi2Pending",
+    )
 }
 
 // ---- Model Exchange (not offered: modelDescription.xml has no ModelExchange) ----
@@ -647,9 +689,15 @@ mod tests {
 
     #[test]
     fn file_uris() {
-        assert_eq!(uri_path("file:///tmp/a%20b/resources").as_deref(), Some("/tmp/a b/resources"));
+        assert_eq!(
+            uri_path("file:///tmp/a%20b/resources").as_deref(),
+            Some("/tmp/a b/resources")
+        );
         assert_eq!(uri_path("file:/tmp/x").as_deref(), Some("/tmp/x"));
-        assert_eq!(uri_path("file://localhost/tmp/x").as_deref(), Some("/tmp/x"));
+        assert_eq!(
+            uri_path("file://localhost/tmp/x").as_deref(),
+            Some("/tmp/x")
+        );
         assert_eq!(uri_path("http://x/y"), None);
         assert_eq!(uri_path("file:///bad%2"), None);
     }

@@ -91,7 +91,13 @@ macro_rules! bar {
             par(
                 concat!("link", $p, ".inertia"),
                 "kg.m2",
-                concat!("link ", $p, " (", $what, ") moment of inertia about its COG"),
+                concat!(
+                    "link ",
+                    $p,
+                    " (",
+                    $what,
+                    ") moment of inertia about its COG"
+                ),
             ),
         ]
     };
@@ -135,8 +141,16 @@ const HEAD: [Variable; 7] = [
 const TAIL: [Variable; 25] = [
     par("rocker_d", "m", "D on the rocker, distance from E"),
     par("mass", "kg", "the oscillating mass on the rocker"),
-    par("mass_inertia", "kg.m2", "the oscillating mass's own moment of inertia"),
-    par("mass_at", "m", "the oscillating mass's distance from E along the rocker"),
+    par(
+        "mass_inertia",
+        "kg.m2",
+        "the oscillating mass's own moment of inertia",
+    ),
+    par(
+        "mass_at",
+        "m",
+        "the oscillating mass's distance from E along the rocker",
+    ),
     par("shaft_inertia", "kg.m2", "output shaft inertia J_s"),
     par("gravity.x", "m/s2", "gravity, x"),
     par("gravity.y", "m/s2", "gravity, y"),
@@ -160,15 +174,47 @@ const TAIL: [Variable; 25] = [
     ),
     out("crank_angle", "rad", "crank angle theta1, CCW from x"),
     out("crank_speed", "rad/s", "crank speed omega1, CCW positive"),
-    out("shaft_angle", "rad", "output shaft angle turned since the start, CCW positive"),
-    out("shaft_speed", "rad/s", "output shaft speed, CCW positive (0 while held)"),
-    out("c6", "N.m", "torque transmitted by lever 6's clutch, positive in the drive direction"),
-    out("c8", "N.m", "torque transmitted by lever 8's clutch, positive in the drive direction"),
-    out("audit.kinetic", "J", "kinetic energy of the links and the shaft"),
+    out(
+        "shaft_angle",
+        "rad",
+        "output shaft angle turned since the start, CCW positive",
+    ),
+    out(
+        "shaft_speed",
+        "rad/s",
+        "output shaft speed, CCW positive (0 while held)",
+    ),
+    out(
+        "c6",
+        "N.m",
+        "torque transmitted by lever 6's clutch, positive in the drive direction",
+    ),
+    out(
+        "c8",
+        "N.m",
+        "torque transmitted by lever 8's clutch, positive in the drive direction",
+    ),
+    out(
+        "audit.kinetic",
+        "J",
+        "kinetic energy of the links and the shaft",
+    ),
     out("audit.potential", "J", "potential energy (gravity)"),
-    out("audit.motor_work", "J", "work of the motor on the crank since the start"),
-    out("audit.load_work", "J", "work done against the load on the shaft since the start"),
-    out("audit.impact_loss", "J", "kinetic energy lost in plastic impacts since the start"),
+    out(
+        "audit.motor_work",
+        "J",
+        "work of the motor on the crank since the start",
+    ),
+    out(
+        "audit.load_work",
+        "J",
+        "work done against the load on the shaft since the start",
+    ),
+    out(
+        "audit.impact_loss",
+        "J",
+        "kinetic energy lost in plastic impacts since the start",
+    ),
     out(
         "audit.residual",
         "J",
@@ -517,14 +563,22 @@ mod tests {
         assert_eq!(real(vr::FIRST_OUTPUT), Some("crank_angle"));
         assert_eq!(real(N_REAL as u32 - 1), Some("audit.residual"));
         assert_eq!(real(N_REAL as u32), None);
-        assert_eq!(lookup(Kind::Integer, vr::MODE).map(|v| v.1.name), Some("mode"));
+        assert_eq!(
+            lookup(Kind::Integer, vr::MODE).map(|v| v.1.name),
+            Some("mode")
+        );
         assert_eq!(
             lookup(Kind::Boolean, vr::BRANCH_C + 2).map(|v| v.1.name),
             Some("branch_i_left")
         );
         let outputs = VARIABLES.iter().filter(|v| v.kind == Kind::Real);
         for (k, v) in outputs.enumerate() {
-            assert_eq!(v.role == Role::Output, k >= vr::FIRST_OUTPUT as usize, "{}", v.name);
+            assert_eq!(
+                v.role == Role::Output,
+                k >= vr::FIRST_OUTPUT as usize,
+                "{}",
+                v.name
+            );
         }
         let mut names: Vec<_> = VARIABLES.iter().map(|v| v.name).collect();
         names.sort_unstable();

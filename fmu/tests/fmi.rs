@@ -44,12 +44,8 @@ impl Fmu {
     fn with_guid(guid: &str, kind: c_int) -> Result<Self, Messages> {
         let mut log: Box<Messages> = Box::default();
         // SAFETY: the same C ABI for the named arguments; no variadic one is passed.
-        let f: Logger = unsafe {
-            core::mem::transmute::<
-                unsafe extern "C" fn(_, _, _, _, _),
-                Logger,
-            >(logger)
-        };
+        let f: Logger =
+            unsafe { core::mem::transmute::<unsafe extern "C" fn(_, _, _, _, _), Logger>(logger) };
         let callbacks = Box::new(CallbackFunctions {
             logger: Some(f),
             allocate_memory: None,
@@ -180,7 +176,10 @@ fn s2_through_do_step_is_the_twin_bit_for_bit() {
         same(&fmu, &twin, &format!("step {}", k + 1));
         modes.insert(fmu.mode());
     }
-    assert!(modes.len() >= 3, "S2 goes through several modes by 0.25 s: {modes:?}");
+    assert!(
+        modes.len() >= 3,
+        "S2 goes through several modes by 0.25 s: {modes:?}"
+    );
     let mut t = 0.0;
     assert_eq!(unsafe { fmi2GetRealStatus(fmu.c, 2, &mut t) }, Status::Ok);
     assert!((t - 0.25).abs() < 1e-12, "{t}");
@@ -197,7 +196,10 @@ fn a_communication_step_is_whole_steps_of_h() {
     fmu.init();
     let mut twin = s2_twin(h);
     for k in 0..30u32 {
-        assert_eq!(fmi2DoStep(fmu.c, f64::from(k) * 10.0 * h, 10.0 * h, 1), Status::Ok);
+        assert_eq!(
+            fmi2DoStep(fmu.c, f64::from(k) * 10.0 * h, 10.0 * h, 1),
+            Status::Ok
+        );
         for _ in 0..10 {
             twin.step(&Inputs {
                 motor: MotorInput::Torque(12.0),
@@ -211,7 +213,11 @@ fn a_communication_step_is_whole_steps_of_h() {
     // 1.5 h is refused, named.
     let t = 300.0 * h;
     assert_eq!(fmi2DoStep(fmu.c, t, 1.5 * h, 1), Status::Error);
-    assert!(fmu.last().contains("not a whole multiple"), "{}", fmu.last());
+    assert!(
+        fmu.last().contains("not a whole multiple"),
+        "{}",
+        fmu.last()
+    );
     assert_eq!(fmu.log.last().unwrap().1, "logStatusError");
 }
 
@@ -228,7 +234,11 @@ fn nan_input_is_an_error_named_and_reset_recovers() {
     assert_eq!((status, cat.as_str()), (Status::Error, "logStatusError"));
     assert!(msg.contains("motor_torque") && msg.contains("NaN"), "{msg}");
     assert_eq!(fmi2DoStep(fmu.c, h, h, 1), Status::Error);
-    assert!(fmu.last().contains("not allowed in state error"), "{}", fmu.last());
+    assert!(
+        fmu.last().contains("not allowed in state error"),
+        "{}",
+        fmu.last()
+    );
     assert_eq!(fmi2Reset(fmu.c), Status::Ok);
     fmu.init();
     let mut twin = s2_twin(h);
@@ -273,14 +283,24 @@ fn a_failed_twin_step_is_an_error_with_its_message() {
 fn misuse_is_named() {
     let fmu = Fmu::new();
     assert_eq!(fmi2DoStep(fmu.c, 0.0, 1e-4, 1), Status::Error);
-    assert!(fmu.last().contains("fmi2DoStep is not allowed in state instantiated"));
+    assert!(fmu
+        .last()
+        .contains("fmi2DoStep is not allowed in state instantiated"));
     assert_eq!(fmi2Reset(fmu.c), Status::Ok);
     fmu.init();
     assert_eq!(fmu.set(vr::MASS, 7.0), Status::Error);
-    assert!(fmu.last().contains("mass cannot be set in state step mode"), "{}", fmu.last());
+    assert!(
+        fmu.last().contains("mass cannot be set in state step mode"),
+        "{}",
+        fmu.last()
+    );
     assert_eq!(fmi2Reset(fmu.c), Status::Ok);
     assert_eq!(fmu.set(vr::FIRST_OUTPUT, 1.0), Status::Error);
-    assert!(fmu.last().contains("crank_angle is an output"), "{}", fmu.last());
+    assert!(
+        fmu.last().contains("crank_angle is an output"),
+        "{}",
+        fmu.last()
+    );
     assert_eq!(fmi2Reset(fmu.c), Status::Ok);
     // A converter that does not assemble fails at the end of initialization.
     assert_eq!(fmu.set(vr::LINK, 5.0), Status::Ok);
@@ -289,13 +309,18 @@ fn misuse_is_named() {
     assert!(fmu.last().contains("cannot be set up"), "{}", fmu.last());
     assert_eq!(fmi2GetFMUstate(fmu.c, core::ptr::null_mut()), Status::Error);
     assert!(fmu.last().contains("canGetAndSetFMUstate is false"));
-    assert_eq!(fmi2DoStep(core::ptr::null_mut(), 0.0, 1e-4, 1), Status::Error);
+    assert_eq!(
+        fmi2DoStep(core::ptr::null_mut(), 0.0, 1e-4, 1),
+        Status::Error
+    );
 }
 
 // fmi2Instantiate refuses Model Exchange and a GUID that is not the description's.
 #[test]
 fn instantiate_checks_type_and_guid() {
-    let log = Fmu::with_guid(&Description::default().guid(), 0).err().unwrap();
+    let log = Fmu::with_guid(&Description::default().guid(), 0)
+        .err()
+        .unwrap();
     assert!(log[0].2.contains("Co-Simulation"), "{log:?}");
     let log = Fmu::with_guid("{0}", CO_SIMULATION).err().unwrap();
     assert!(log[0].2.contains("GUID {0}"), "{log:?}");

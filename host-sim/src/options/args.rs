@@ -6,8 +6,8 @@
 //! and repeated options.
 
 use super::{
-    AnimFormat, BatchOptions, FmuOptions, Output, PlotOptions, ProgressStyle, ReplayOptions, RunOptions,
-    SweepOptions, DEFAULT_FPS, DEFAULT_SLOW, FPS_RANGE, MAX_THREADS, SLOW_RANGE,
+    AnimFormat, BatchOptions, FmuOptions, Output, PlotOptions, ProgressStyle, ReplayOptions,
+    RunOptions, SweepOptions, DEFAULT_FPS, DEFAULT_SLOW, FPS_RANGE, MAX_THREADS, SLOW_RANGE,
 };
 use crate::error::{usage_err, Sci, UsageError};
 use crate::model::bench::{BenchLog, ClutchLog};
