@@ -13,7 +13,7 @@ use crate::options::args::{
 use crate::options::{
     BatchOptions, FmuOptions, PlotOptions, ReplayOptions, RunOptions, SweepOptions,
 };
-use crate::output::{fmu, pictures};
+use crate::output::pictures;
 use crate::run;
 use clap::error::ErrorKind;
 use clap::{ColorChoice, Parser, Subcommand};
@@ -151,7 +151,7 @@ where
         Ok(Command::Batch(opts)) => batch::execute(&opts, stdout, stderr),
         Ok(Command::Plot(opts)) => pictures::plot_csv(&opts, stdout, stderr),
         Ok(Command::Sweep(opts)) => sweep::execute(&opts, stdout, stderr),
-        Ok(Command::Fmu(opts)) => fmu::execute(&opts, stdout, stderr),
+        Ok(Command::Fmu(opts)) => run::fmu::execute(&opts, stdout, stderr),
         Err(ParseError::Clap(e)) => {
             let text = e.render().to_string();
             match e.kind() {

@@ -14,7 +14,6 @@
 
 pub mod animate;
 pub mod csv;
-pub mod fmu;
 pub mod pictures;
 pub mod plot;
 
