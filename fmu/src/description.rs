@@ -95,7 +95,7 @@ impl Description {
              canHandleVariableCommunicationStepSize=\"true\" canInterpolateInputs=\"false\" \
              maxOutputDerivativeOrder=\"0\" canRunAsynchronuously=\"false\" \
              canBeInstantiatedOnlyOncePerProcess=\"false\" \
-             canNotUseMemoryManagementFunctions=\"true\" canGetAndSetFMUstate=\"false\" \
+             canNotUseMemoryManagementFunctions=\"true\" canGetAndSetFMUstate=\"true\" \
              canSerializeFMUstate=\"false\" providesDirectionalDerivative=\"false\"/>"
         );
         x.push_str("  <UnitDefinitions>\n");

@@ -2,15 +2,16 @@
 //! Exchange's), exported under its own name as the FMI 2.0 standard's C API. Each one
 //! checks its pointers, runs its body inside `catch_unwind` (no panic crosses into the
 //! importer: a caught one is `fmi2Fatal`, logged) and hands over to
-//! [`Instance`](crate::instance::Instance). Model Exchange's functions, the FMU
-//! states and directional derivatives are not offered by this Co-Simulation FMU
+//! [`Instance`](crate::instance::Instance). The FMU state is saved and restored
+//! (`fmi2GetFMUstate`, a copy of the twin); Model Exchange's functions, the state's
+//! serialization and directional derivatives are not offered by this Co-Simulation FMU
 //! (modelDescription.xml says so): they return `fmi2Error` with a message.
 
 #![allow(non_snake_case)]
 #![allow(clippy::missing_safety_doc)]
 
 use crate::description::{Description, LOG_CATEGORIES};
-use crate::instance::{Instance, Log, Status};
+use crate::instance::{Instance, Log, Saved, Status};
 use crate::variables::Start;
 use core::ffi::{c_char, c_int, c_void, CStr};
 use std::ffi::CString;
@@ -466,18 +467,50 @@ fn unsupported(c: Component, call: &str, why: &str) -> Status {
 }
 
 #[no_mangle]
-pub extern "C" fn fmi2GetFMUstate(c: Component, _state: *mut FmuState) -> Status {
-    unsupported(c, "fmi2GetFMUstate", "canGetAndSetFMUstate is false")
+pub unsafe extern "C" fn fmi2GetFMUstate(c: Component, state: *mut FmuState) -> Status {
+    with(c, |inst| {
+        if state.is_null() {
+            return inst.fail("fmi2GetFMUstate: a null FMUstate pointer");
+        }
+        // SAFETY: the importer's pointer to a state: null, or one this FMU returned
+        // and has not freed (FMI 2.0 2.1.8).
+        let p = unsafe { *state };
+        if p.is_null() {
+            let saved = Box::new(inst.save());
+            // SAFETY: writable, checked above.
+            unsafe { *state = Box::into_raw(saved).cast() };
+        } else {
+            // SAFETY: a state from fmi2GetFMUstate.
+            inst.save_into(unsafe { &mut *p.cast::<Saved>() });
+        }
+        Status::Ok
+    })
 }
 
 #[no_mangle]
-pub extern "C" fn fmi2SetFMUstate(c: Component, _state: FmuState) -> Status {
-    unsupported(c, "fmi2SetFMUstate", "canGetAndSetFMUstate is false")
+pub unsafe extern "C" fn fmi2SetFMUstate(c: Component, state: FmuState) -> Status {
+    with(c, |inst| {
+        if state.is_null() {
+            return inst.fail("fmi2SetFMUstate: a null FMUstate");
+        }
+        // SAFETY: a state from fmi2GetFMUstate, not freed.
+        inst.restore(unsafe { &*state.cast::<Saved>() })
+    })
 }
 
 #[no_mangle]
-pub extern "C" fn fmi2FreeFMUstate(c: Component, _state: *mut FmuState) -> Status {
-    unsupported(c, "fmi2FreeFMUstate", "canGetAndSetFMUstate is false")
+pub unsafe extern "C" fn fmi2FreeFMUstate(c: Component, state: *mut FmuState) -> Status {
+    with(c, |_| {
+        // SAFETY: the importer's pointer to a state from fmi2GetFMUstate (or null).
+        if let Some(p) = unsafe { state.as_mut() } {
+            if !p.is_null() {
+                // SAFETY: allocated by fmi2GetFMUstate, freed once: nulled here.
+                drop(unsafe { Box::from_raw(p.cast::<Saved>()) });
+                *p = core::ptr::null_mut();
+            }
+        }
+        Status::Ok
+    })
 }
 
 #[no_mangle]

@@ -68,6 +68,16 @@ pub const GRID_TOL: f64 = 1e-6;
 /// Where an instance's messages go: (status, category, message).
 pub type Log = Box<dyn FnMut(Status, &'static str, &str)>;
 
+/// A saved state of an instance (`fmi2GetFMUstate`): all that `fmi2SetFMUstate`
+/// restores (the twin a copy, not a reference to the instance's).
+pub struct Saved {
+    phase: Phase,
+    values: Start,
+    start_time: f64,
+    twin: Option<Box<Twin<f64>>>,
+    dirty: bool,
+}
+
 /// One instance.
 pub struct Instance {
     /// The instance name given to `fmi2Instantiate`.
@@ -133,6 +143,52 @@ impl Instance {
         self.start_time = 0.0;
         self.built = false;
         self.dirty = true;
+        Status::Ok
+    }
+
+    /// `fmi2GetFMUstate`: a copy of the present state.
+    pub fn save(&self) -> Saved {
+        Saved {
+            phase: self.phase,
+            values: self.values,
+            start_time: self.start_time,
+            twin: self.twin().map(|t| Box::new(t.clone())),
+            dirty: self.dirty,
+        }
+    }
+
+    /// `fmi2GetFMUstate` over a state it returned before: the present state copied
+    /// into `saved` (its twin's allocation reused).
+    pub fn save_into(&self, saved: &mut Saved) {
+        saved.phase = self.phase;
+        saved.values = self.values;
+        saved.start_time = self.start_time;
+        saved.dirty = self.dirty;
+        match (self.twin(), &mut saved.twin) {
+            (Some(t), Some(s)) => (**s).clone_from(t),
+            (Some(t), none) => *none = Some(Box::new(t.clone())),
+            (None, s) => *s = None,
+        }
+    }
+
+    /// `fmi2SetFMUstate`: back to `saved` (also from the error state: a rollback to a
+    /// state before a failed step).
+    pub fn restore(&mut self, saved: &Saved) -> Status {
+        match &saved.twin {
+            Some(t) if self.built => {
+                // SAFETY: `built`: the place holds a twin.
+                unsafe { self.twin.assume_init_mut() }.clone_from(t);
+            }
+            Some(t) => {
+                self.twin.write(Twin::clone(t));
+                self.built = true;
+            }
+            None => self.built = false,
+        }
+        self.phase = saved.phase;
+        self.values = saved.values;
+        self.start_time = saved.start_time;
+        self.dirty = saved.dirty;
         Status::Ok
     }
 

@@ -23,3 +23,14 @@ def s2_csv():
     if not path.is_file():
         pytest.fail(f"no host-sim S2 CSV at {path}: run fmu/run-tests")
     return str(path)
+
+
+@pytest.fixture(scope="session")
+def variant():
+    """The FMU of S2 with --h 2e-4 --t-end 0.3 --load 0 --ccw, and host-sim's run of it."""
+    fmu = pathlib.Path(os.environ.get("STRUCTOMAT_VARIANT_FMU", ROOT / "target/fmu/ccc-variant.fmu"))
+    csv = pathlib.Path(os.environ.get("STRUCTOMAT_VARIANT_CSV", ROOT / "target/fmu/s2-variant.csv"))
+    for p in (fmu, csv):
+        if not p.is_file():
+            pytest.fail(f"no {p}: run fmu/run-tests")
+    return str(fmu), str(csv)

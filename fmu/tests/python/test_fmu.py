@@ -67,10 +67,12 @@ def test_every_output_is_described(fmu_path):
     assert md.defaultExperiment.stepSize == str(H) or float(md.defaultExperiment.stepSize) == H
 
 
-def test_simulate_s2_equals_host_sim(fmu_path, s2_csv):
-    want = read_csv(s2_csv)
+def compare(fmu_path, csv_path, h):
+    """simulate_fmu at the communication step h against host-sim's CSV: every output
+    to 1e-12; returns the largest difference of each."""
+    want = read_csv(csv_path)
     t_end = want["t"][-1]
-    got = simulate_fmu(fmu_path, stop_time=t_end, output_interval=H, validate=True)
+    got = simulate_fmu(fmu_path, stop_time=t_end, output_interval=h, validate=True)
     assert len(got) == len(want["t"]), (len(got), len(want["t"]))
     np.testing.assert_allclose(got["time"], want["t"], rtol=0, atol=1e-12)
     worst = {}
@@ -79,9 +81,27 @@ def test_simulate_s2_equals_host_sim(fmu_path, s2_csv):
         diff = float(np.max(np.abs(g - w)))
         worst[out] = diff
         assert diff <= 1e-12, f"{out} vs host-sim's {col}: {diff:.3e}"
+    return want, worst
+
+
+def test_simulate_s2_equals_host_sim(fmu_path, s2_csv):
+    want, worst = compare(fmu_path, s2_csv, H)
     # S2 goes through its diode's modes: the comparison covers events, not only I0.
     assert len(set(want["mode_code"])) >= 3
-    print("largest |FMU - host-sim| by output:", worst)
+    print("S2: largest |FMU - host-sim| by output:", worst)
+
+
+def test_start_values_come_from_the_fmu(variant):
+    # Not the binary's defaults: h, the load and the drive come from resources/start.txt.
+    fmu_path, csv_path = variant
+    md = read_model_description(fmu_path)
+    start = {v.name: v.start for v in md.modelVariables}
+    assert float(start["h"]) == 2e-4 and float(start["load_torque"]) == 0.0
+    assert start["ccw"] in ("true", True)
+    want, worst = compare(fmu_path, csv_path, 2e-4)
+    # Counter-clockwise without load: the shaft turns the other way.
+    assert want["shaft_angle"][-1] > 0
+    print("variant: largest |FMU - host-sim| by output:", worst)
 
 
 class Log:
