@@ -176,3 +176,25 @@ def test_a_step_off_the_grid_of_h_is_refused(fmu_path):
         fmu.doStep(currentCommunicationPoint=0.0, communicationStepSize=1.5 * H)
     assert "not a whole multiple" in log.messages[-1][2]
     fmu.freeInstance()
+
+
+def test_a_saved_state_replays_the_same_steps(fmu_path):
+    log = Log()
+    fmu, vr = slave(fmu_path, log)
+    fmu.setupExperiment(startTime=0.0)
+    fmu.enterInitializationMode()
+    fmu.exitInitializationMode()
+    outs = [vr[name] for name in COLUMNS if name != "mode"]
+    for k in range(700):
+        fmu.doStep(currentCommunicationPoint=k * H, communicationStepSize=H)
+    state = fmu.getFMUstate()
+    for k in range(700, 1000):
+        fmu.doStep(currentCommunicationPoint=k * H, communicationStepSize=H)
+    first = fmu.getReal(outs)
+    fmu.setFMUstate(state)
+    for k in range(700, 1000):
+        fmu.doStep(currentCommunicationPoint=k * H, communicationStepSize=H)
+    assert fmu.getReal(outs) == first
+    fmu.freeFMUstate(state)
+    fmu.terminate()
+    fmu.freeInstance()
