@@ -187,3 +187,22 @@ The clutch log (CSV: t, event, from, to; the events and modes in host-sim's name
   after), and the events missing or extra at the end.
 
 --observer (the twin corrected from the encoders) is not built yet and is refused.";
+
+/// After the options in `host-sim fmu --help`: what the FMU is and how it steps.
+pub const FMU: &str = "\
+The FMU (FMI 2.0 Co-Simulation, model identifier structomat_ccc) holds
+modelDescription.xml, binaries/<platform>/structomat_ccc.so (the structomat-fmu cdylib,
+found next to this executable: build both with `cargo build --release -p
+structomat-fmu -p host-sim`, or give --lib) and resources/start.txt.
+  parameters   h, the converter's (A, F, H, link1..8 length/mass/inertia, rocker_d,
+               mass, mass_inertia, mass_at, shaft_inertia, gravity), its initial state
+               (initial.crank_deg, ...) and clutch, ccw, branch_c/g/i_left: fixed at
+               initialization, their start values the converter's of the options
+  inputs       motor_torque, load_torque (N·m), held over a communication step
+  outputs      mode (Integer: 0 free, 1 I0, 2 I6, 3 I8, 4 jam, 5 A6, 6 A8, 7 A68),
+               crank_angle, crank_speed, shaft_angle, shaft_speed, c6, c8, audit.kinetic,
+               audit.potential, audit.motor_work, audit.load_work, audit.impact_loss,
+               audit.residual
+  Every communication step must be a whole multiple n >= 1 of h (to 1e-6 h): the twin
+  takes n steps. A step the twin refuses, a non-finite input or a call out of order
+  is fmi2Error with its message through the logger; only fmi2Reset steps again.";

@@ -7,8 +7,12 @@ pub mod help;
 use crate::error::{report_write, UsageError, EXIT_FAILURE, EXIT_OK, EXIT_USAGE, HINT};
 use crate::jobs::{batch, sweep};
 use crate::model::scenarios::Source;
-use crate::options::args::{AnalyzeArgs, BatchArgs, PlotArgs, ReplayArgs, RunArgs, SweepArgs};
-use crate::options::{BatchOptions, PlotOptions, ReplayOptions, RunOptions, SweepOptions};
+use crate::options::args::{
+    AnalyzeArgs, BatchArgs, FmuArgs, PlotArgs, ReplayArgs, RunArgs, SweepArgs,
+};
+use crate::options::{
+    BatchOptions, FmuOptions, PlotOptions, ReplayOptions, RunOptions, SweepOptions,
+};
 use crate::output::pictures;
 use crate::run;
 use clap::error::ErrorKind;
@@ -59,6 +63,10 @@ pub enum CliCommand {
     Sweep(SweepArgs),
     /// Plot a CSV that host-sim run wrote (as run --plot)
     Plot(PlotArgs),
+    /// Package the converter's twin as an FMI 2.0 Co-Simulation FMU (the converter
+    /// options of run give its start values)
+    #[command(after_long_help = help::FMU)]
+    Fmu(FmuArgs),
 }
 
 /// A parsed and checked command line.
@@ -78,6 +86,8 @@ pub enum Command {
     Plot(PlotOptions),
     /// `host-sim sweep FILE --out-dir DIR [options]`.
     Sweep(SweepOptions),
+    /// `host-sim fmu [SCENARIO|FILE.toml] --out FILE.fmu [options]`.
+    Fmu(FmuOptions),
 }
 
 /// Why a command line does not give a command.
@@ -107,6 +117,7 @@ where
         CliCommand::Batch(a) => a.options().map(Command::Batch),
         CliCommand::Sweep(a) => a.options().map(Command::Sweep),
         CliCommand::Plot(a) => a.options().map(Command::Plot),
+        CliCommand::Fmu(a) => a.options().map(Command::Fmu),
     };
     checked.map_err(ParseError::Usage)
 }
@@ -140,6 +151,7 @@ where
         Ok(Command::Batch(opts)) => batch::execute(&opts, stdout, stderr),
         Ok(Command::Plot(opts)) => pictures::plot_csv(&opts, stdout, stderr),
         Ok(Command::Sweep(opts)) => sweep::execute(&opts, stdout, stderr),
+        Ok(Command::Fmu(opts)) => run::fmu::execute(&opts, stdout, stderr),
         Err(ParseError::Clap(e)) => {
             let text = e.render().to_string();
             match e.kind() {

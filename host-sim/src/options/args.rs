@@ -6,8 +6,8 @@
 //! and repeated options.
 
 use super::{
-    AnimFormat, BatchOptions, Output, PlotOptions, ProgressStyle, ReplayOptions, RunOptions,
-    SweepOptions, DEFAULT_FPS, DEFAULT_SLOW, FPS_RANGE, MAX_THREADS, SLOW_RANGE,
+    AnimFormat, BatchOptions, FmuOptions, Output, PlotOptions, ProgressStyle, ReplayOptions,
+    RunOptions, SweepOptions, DEFAULT_FPS, DEFAULT_SLOW, FPS_RANGE, MAX_THREADS, SLOW_RANGE,
 };
 use crate::error::{usage_err, Sci, UsageError};
 use crate::model::bench::{BenchLog, ClutchLog};
@@ -140,6 +140,78 @@ impl RunArgs {
             fps: fps.unwrap_or(DEFAULT_FPS),
             slow: slow.unwrap_or(DEFAULT_SLOW),
         })
+    }
+}
+
+/// The arguments of `host-sim fmu`: the converter (a scenario or run file, with the
+/// converter options of `run`) whose twin the FMU is, and where it goes.
+#[derive(Args, Clone, Debug, Default, PartialEq)]
+pub struct FmuArgs {
+    /// The converter: a built-in scenario (ccc-s2, ccc-s1) or a converter run file;
+    /// its values are the FMU's start values
+    #[arg(value_name = "SCENARIO|FILE.toml", default_value = "ccc-s2")]
+    pub scenario: String,
+    /// Write the FMU (a zip: modelDescription.xml, the binary, resources/start.txt) to
+    /// FILE
+    #[arg(long, value_name = "FILE")]
+    pub out: String,
+    /// The twin's fixed step h, the start value of the FMU's parameter h (default: the
+    /// scenario's); also spelled --step
+    #[arg(
+        long,
+        visible_alias = "step",
+        value_name = "SECONDS",
+        allow_negative_numbers = true
+    )]
+    pub h: Option<String>,
+    /// The default experiment's stop time (default: the scenario's t_end)
+    #[arg(long, value_name = "SECONDS", allow_negative_numbers = true)]
+    pub t_end: Option<String>,
+    /// The start value of the input motor_torque, N·m, CCW positive (default: the
+    /// scenario's constant motor torque)
+    #[arg(long, value_name = "N·M", allow_negative_numbers = true, help_heading = CONVERTER)]
+    pub motor: Option<String>,
+    /// ccc-s2: the start value of the input load_torque T_r >= 0, N·m (default 800)
+    #[arg(long, value_name = "N·M", allow_negative_numbers = true, help_heading = CONVERTER)]
+    pub load: Option<String>,
+    /// ccc-s2: the shaft turns counter-clockwise (the start value of the parameter ccw)
+    #[arg(long, help_heading = CONVERTER)]
+    pub ccw: bool,
+    /// The FMU's binary, the structomat-fmu cdylib (default: libstructomat_fmu.so next
+    /// to this host-sim executable, as `cargo build --release -p structomat-fmu -p
+    /// host-sim` leaves it)
+    #[arg(long, value_name = "FILE")]
+    pub lib: Option<String>,
+}
+
+impl FmuArgs {
+    /// The FMU's options: the converter's as `run` checks them (the same messages),
+    /// the output and the binary's path.
+    pub fn options(&self) -> Result<FmuOptions, UsageError> {
+        let run = RunArgs {
+            scenario: self.scenario.clone(),
+            h: self.h.clone(),
+            t_end: self.t_end.clone(),
+            motor: self.motor.clone(),
+            load: self.load.clone(),
+            ccw: self.ccw,
+            quiet: true,
+            ..RunArgs::default()
+        }
+        .options()?;
+        if run.scenario.converter().is_none() {
+            return Err(usage_err(format!(
+                "fmu: {} is not a converter: the FMU is the converter's twin (ccc-s1, ccc-s2 or a converter run file)",
+                run.scenario.name()
+            )));
+        }
+        let out = parse_path("--out", &self.out)?;
+        let lib = self
+            .lib
+            .as_deref()
+            .map(|v| parse_path("--lib", v))
+            .transpose()?;
+        Ok(FmuOptions { run, out, lib })
     }
 }
 

@@ -20,6 +20,18 @@ pub enum Output {
     File(PathBuf),
 }
 
+/// Options of `host-sim fmu`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FmuOptions {
+    /// The converter and its overrides, as for `run` (`h`, `t_end`, `motor`, `load`,
+    /// `ccw`); the other fields unused.
+    pub run: RunOptions,
+    /// Where the FMU goes.
+    pub out: PathBuf,
+    /// The FMU's binary (`None`: next to the executable).
+    pub lib: Option<PathBuf>,
+}
+
 /// Frames a second of an animation unless `--fps` says otherwise.
 pub const DEFAULT_FPS: u32 = 25;
 /// Slow-motion factor of an animation unless `--slow` says otherwise (real time).

@@ -3,10 +3,12 @@
 //! rows and log lines to an [`Observer`]. [`simulate`] picks the runner of a run's
 //! source, [`dispatch`] its precision and gathers the observers (the CSV writer, the
 //! pictures' recorder), and [`execute`] is `host-sim run`: files, pictures, summary,
-//! exit code. [`replay`] is `host-sim replay`: a bench log on the converter's twin.
+//! exit code. [`replay`] is `host-sim replay`: a bench log on the converter's twin;
+//! [`fmu`] is `host-sim fmu`: the converter's twin packaged as an FMI 2.0 FMU.
 
 pub mod columns;
 pub mod converter;
+pub mod fmu;
 pub mod interrupt;
 pub mod mechanism;
 pub mod progress;
