@@ -109,7 +109,7 @@ impl<T: Real> Twin<T> {
         }
         self.slots
             .reference_mut()
-            .eval(w.t, &yr, inputs, self.drive)
+            .eval(w.t, &yr, inputs, self.drive, &self.params.friction)
             .map_err(|e| self.physical_error(e))?;
         let js = self.params.shaft_inertia;
         let with_shaft = js > T::zero();

@@ -494,6 +494,7 @@ impl<T: Real> Twin<T> {
             slot: self.slots.cur_mut(),
             inputs,
             drive: self.drive,
+            friction: &self.params.friction,
         };
         let Err(e) = self.dp5.step(&mut sys, &mut w.t, &mut w.y, h) else {
             return Ok(true);
