@@ -395,14 +395,6 @@ impl<T: Real> Slot<T> {
         }
     }
 
-    /// The power the losses dissipate at the last evaluation's speeds, W (≥ 0): the
-    /// friction torque times its joint's relative speed, summed, and the drag's.
-    pub fn loss_power(&self, f: &Friction<T>) -> T {
-        let mut p = T::zero();
-        self.losses(f, |_, tau, w| p -= tau * w);
-        p * T::c(0.5)
-    }
-
     /// The kinematics at `y` up to the velocities only (see [`evaluate_velocities`]):
     /// the links' positions and speeds, not their accelerations.
     pub fn eval_speeds(&mut self, t: T, y: &SVector<T, STATE>) -> Result<(), StepError> {
@@ -430,19 +422,31 @@ impl<T: Real> Slot<T> {
         }
         let crank = self.body(CRANK) as usize;
         let w1 = self.ws.body.get(crank).map_or(T::zero(), |b| b.omega);
-        dy[W_MOTOR] = self
+        let mut on_crank = self
             .ws
             .applied_moment
             .get(crank)
             .copied()
-            .unwrap_or(T::zero())
-            * w1;
+            .unwrap_or(T::zero());
+        let mut loss = T::zero();
+        if friction.active() {
+            // The crank's applied moment holds its joints' friction as well: the
+            // motor's alone is its power.
+            self.losses(friction, |body, tau, w| {
+                if body as usize == crank {
+                    on_crank -= tau;
+                }
+                loss -= tau * w;
+            });
+        }
+        dy[W_MOTOR] = on_crank * w1;
         if let Some(b) = self.shaft_body() {
             let ws = self.ws.body.get(b as usize).map_or(T::zero(), |b| b.omega);
             dy[W_LOAD] = inputs.load * drive * ws;
         }
         if friction.active() {
-            dy[W_LOAD] += self.loss_power(friction);
+            // Each loss visits its two bodies: half the sum is its power.
+            dy[W_LOAD] += loss * T::c(0.5);
         }
         dy
     }
