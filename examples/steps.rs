@@ -60,8 +60,7 @@ fn twin<T: Real>(steps: u32) -> Result<T, String> {
         measured: None,
     };
     let settings = TwinSettings::reference(T::c(1e-4));
-    let mut twin =
-        Box::new(Twin::new(params(), settings, inputs).map_err(|e| e.to_string())?);
+    let mut twin = Box::new(Twin::new(params(), settings, inputs).map_err(|e| e.to_string())?);
     for _ in 0..steps {
         twin.step(black_box(&inputs)).map_err(|e| e.to_string())?;
     }
@@ -91,12 +90,7 @@ fn twin_at<T: Real>(at: u32, n: u32, log: bool) -> Result<T, String> {
         .and_then(|h| h.parse::<f64>().ok())
         .unwrap_or(1e-4);
     let mut twin = Box::new(
-        Twin::new(
-            params(),
-            TwinSettings::reference(T::c(h)),
-            inputs,
-        )
-        .map_err(|e| e.to_string())?,
+        Twin::new(params(), TwinSettings::reference(T::c(h)), inputs).map_err(|e| e.to_string())?,
     );
     for k in 0..at {
         let before = (twin.mode(), twin.coordinates());

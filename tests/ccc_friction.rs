@@ -106,7 +106,10 @@ fn regularized_dry_friction_slides_and_creeps_as_stated() {
     let mut twin = Twin::new(p, s, inputs).expect("the converter sets up");
     run_to(&mut twin, &inputs, 0.5);
     let w = twin.link(1).omega;
-    assert!(((w - root) / root).abs() < 5e-3, "crank {w}, law's root {root}");
+    assert!(
+        ((w - root) / root).abs() < 5e-3,
+        "crank {w}, law's root {root}"
+    );
     let exact = (t - mu) / c;
     let stated = mu * eps * eps / (2.0 * root * root * c);
     // The regularized law brakes less than the exact one: the crank is faster.
@@ -127,7 +130,10 @@ fn regularized_dry_friction_slides_and_creeps_as_stated() {
     run_to(&mut twin, &inputs, 0.5);
     let creep = eps * t / (mu * mu - t * t).sqrt();
     let w = twin.link(1).omega;
-    assert!(((w - creep) / creep).abs() < 2e-2, "crank {w}, creep {creep}");
+    assert!(
+        ((w - creep) / creep).abs() < 2e-2,
+        "crank {w}, creep {creep}"
+    );
 }
 
 /// The unwrapped angles of the links, rad (index 0: the ground, 0).

@@ -582,7 +582,12 @@ fn friction_keys_by_dotted_path() {
         panic!("converter")
     };
     let fr = c.params.friction;
-    let at = |name: &str| FRICTION_JOINT_NAMES.iter().position(|n| *n == name).unwrap();
+    let at = |name: &str| {
+        FRICTION_JOINT_NAMES
+            .iter()
+            .position(|n| *n == name)
+            .unwrap()
+    };
     let mut viscous = [0.0; 9];
     viscous[at("A")] = 0.5;
     viscous[at("D7")] = 0.25;
@@ -608,8 +613,5 @@ fn friction_keys_by_dotted_path() {
     let mut bad = tree;
     set(&mut bad, "converter.friction.viscous.H6", 1.0);
     let e = run_file_from_value(bad, "job").unwrap_err().to_string();
-    assert!(
-        e.contains("unknown field `H6`") && e.contains("D5"),
-        "{e}"
-    );
+    assert!(e.contains("unknown field `H6`") && e.contains("D5"), "{e}");
 }

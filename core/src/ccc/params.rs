@@ -305,7 +305,10 @@ impl<T: Real> Friction<T> {
             }
         };
         for (k, (c, mu)) in self.viscous.iter().zip(self.coulomb.iter()).enumerate() {
-            let names = FRICTION_KEYS.get(k).copied().unwrap_or(["friction", "friction"]);
+            let names = FRICTION_KEYS
+                .get(k)
+                .copied()
+                .unwrap_or(["friction", "friction"]);
             check(*c, names[0])?;
             check(*mu, names[1])?;
         }
@@ -320,15 +323,42 @@ impl<T: Real> Friction<T> {
 
 /// The run-file keys of each joint's viscous and dry coefficients, for errors.
 const FRICTION_KEYS: [[&str; 2]; 9] = [
-    ["converter.friction.viscous.A", "converter.friction.coulomb.A"],
-    ["converter.friction.viscous.B", "converter.friction.coulomb.B"],
-    ["converter.friction.viscous.C", "converter.friction.coulomb.C"],
-    ["converter.friction.viscous.E", "converter.friction.coulomb.E"],
-    ["converter.friction.viscous.F", "converter.friction.coulomb.F"],
-    ["converter.friction.viscous.D5", "converter.friction.coulomb.D5"],
-    ["converter.friction.viscous.D7", "converter.friction.coulomb.D7"],
-    ["converter.friction.viscous.G", "converter.friction.coulomb.G"],
-    ["converter.friction.viscous.I", "converter.friction.coulomb.I"],
+    [
+        "converter.friction.viscous.A",
+        "converter.friction.coulomb.A",
+    ],
+    [
+        "converter.friction.viscous.B",
+        "converter.friction.coulomb.B",
+    ],
+    [
+        "converter.friction.viscous.C",
+        "converter.friction.coulomb.C",
+    ],
+    [
+        "converter.friction.viscous.E",
+        "converter.friction.coulomb.E",
+    ],
+    [
+        "converter.friction.viscous.F",
+        "converter.friction.coulomb.F",
+    ],
+    [
+        "converter.friction.viscous.D5",
+        "converter.friction.coulomb.D5",
+    ],
+    [
+        "converter.friction.viscous.D7",
+        "converter.friction.coulomb.D7",
+    ],
+    [
+        "converter.friction.viscous.G",
+        "converter.friction.coulomb.G",
+    ],
+    [
+        "converter.friction.viscous.I",
+        "converter.friction.coulomb.I",
+    ],
 ];
 
 /// The names of each link's length, mass and inertia in errors (SPEC 3's numbering).

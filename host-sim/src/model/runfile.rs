@@ -691,7 +691,11 @@ fn friction_of(ck: &Check<'_>, raw: Option<&RawFriction>) -> Result<Friction<f64
         let Some(joints) = table else {
             continue;
         };
-        for ((slot, value), name) in out.iter_mut().zip(joints.values()).zip(FRICTION_JOINT_NAMES) {
+        for ((slot, value), name) in out
+            .iter_mut()
+            .zip(joints.values())
+            .zip(FRICTION_JOINT_NAMES)
+        {
             if let Some(v) = value {
                 *slot = ck.non_negative(&format!("converter.friction.{kind}.{name}"), v)?;
             }

@@ -277,7 +277,10 @@ impl<T: Real> Twin<T> {
         let omega = load.omega;
         let mut y = w.y;
         load_state(cand, &q, omega, &mut y);
-        if cand.eval(w.t, &y, load.inputs, drive, &params.friction).is_err() {
+        if cand
+            .eval(w.t, &y, load.inputs, drive, &params.friction)
+            .is_err()
+        {
             return None;
         }
         let mapped = cand.links(params);

@@ -169,7 +169,12 @@ impl<T: Real> Twin<T> {
         if !(moved <= screen_margin::<T>() * T::c(1e-3) * scale) || (exact && moved != T::zero()) {
             yr[QD] = u_plus[0];
             yr[QD + 1] = u_plus[1];
-            if self.slots.reference_mut().eval(t, yr, inputs, d, &self.params.friction).is_err() {
+            if self
+                .slots
+                .reference_mut()
+                .eval(t, yr, inputs, d, &self.params.friction)
+                .is_err()
+            {
                 // The workspace holds no evaluation: the next screen evaluates again.
                 yr[QD] = T::c(f64::NAN);
                 return None;

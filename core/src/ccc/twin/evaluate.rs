@@ -145,7 +145,10 @@ impl<T: Real> Twin<T> {
     /// Hands the slot's evaluation at `w`'s state (made in full) to the DP5 stepper as
     /// the first stage of a step from there.
     pub(super) fn seed_first_stage(&mut self, w: &Work<T>, inputs: &Inputs<T>) {
-        let k1 = self.slots.cur().rates(&w.y, inputs, self.drive, &self.params.friction);
+        let k1 = self
+            .slots
+            .cur()
+            .rates(&w.y, inputs, self.drive, &self.params.friction);
         self.dp5.seed(w.t, &w.y, &k1);
     }
 

@@ -382,7 +382,11 @@ impl<T: Real> Slot<T> {
             return;
         }
         let shaft = self.shaft_body().unwrap_or(0);
-        let ws = self.ws.body.get(shaft as usize).map_or(T::zero(), |s| s.omega);
+        let ws = self
+            .ws
+            .body
+            .get(shaft as usize)
+            .map_or(T::zero(), |s| s.omega);
         let ws = if shaft == 0 { T::zero() } else { ws };
         for ((_, lever), clutch) in BRANCHES.iter().zip(self.mode.clutches()) {
             if clutch != Clutch::Free {
@@ -691,7 +695,8 @@ impl<T: Real> OdeSystem<T, STATE> for Equations<'_, T> {
         y: &SVector<T, STATE>,
         dy: &mut SVector<T, STATE>,
     ) -> Result<(), StepError> {
-        self.slot.eval(t, y, self.inputs, self.drive, self.friction)?;
+        self.slot
+            .eval(t, y, self.inputs, self.drive, self.friction)?;
         *dy = self.slot.rates(y, self.inputs, self.drive, self.friction);
         Ok(())
     }
