@@ -1114,7 +1114,7 @@ fn converter(ck: &Check<'_>, c: RawConverter, run: &RawRun) -> Result<Converter,
         mass_inertia: ck.non_negative("converter.mass_inertia", c.mass_inertia)?,
         mass_at: ck.non_negative("converter.mass_at", c.mass_at)?,
         shaft_inertia: ck.non_negative("converter.shaft_inertia", c.shaft_inertia)?,
-        friction: friction_of(&ck, c.friction.as_ref())?,
+        friction: friction_of(ck, c.friction.as_ref())?,
         drive: match c.drive {
             RawDrive::Cw => DriveDirection::Cw,
             RawDrive::Ccw => DriveDirection::Ccw,
