@@ -361,3 +361,32 @@ fn clutch_drag_dissipates_its_slip_power() {
     let a = twin.audit();
     assert!(a.residual().abs() <= 1e-6 * a.motor_work, "{a:?}");
 }
+
+/// The f32 twin (the firmware's) with every loss on runs S2's first second and keeps
+/// its audit within its own tolerance's reach: 1e-4 of the motor's work (f32 rounds at
+/// 6e-8; the f64 run's losses are matched to 1e-3).
+#[test]
+fn f32_twin_runs_s2_with_friction() {
+    let mut p = CccParams::<f32>::reference();
+    p.friction.viscous = [0.02; 9];
+    p.friction.coulomb = [0.05; 9];
+    p.friction.clutch_drag = 0.05;
+    let inputs = Inputs {
+        motor: MotorInput::Law(Motor::Constant(12.0f32)),
+        load: 800.0f32,
+        measured: None,
+    };
+    let mut twin = Twin::new(p, TwinSettings::reference(1e-4f32), inputs).expect("S2 in f32");
+    for _ in 0..10_000 {
+        twin.step(&inputs)
+            .expect("a step of S2 in f32 with friction");
+    }
+    let a = twin.audit();
+    assert!(a.residual().abs() <= 1e-4 * a.motor_work, "f32 audit {a:?}");
+    let losses = a.load_work - 800.0 * twin.shaft_angle().abs();
+    println!("f32 S2 with friction: {a:?}, losses {losses} J");
+    assert!(
+        (losses - 25.2549).abs() < 25.2549e-3 * 5.0,
+        "losses {losses} J"
+    );
+}

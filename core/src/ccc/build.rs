@@ -92,9 +92,14 @@ impl<T: Real> BodyMap<T> {
     /// Angle of physical link `p` minus its model body's angle; for a locked lever,
     /// its fixed angle, rad (0 for every link but the levers).
     pub(crate) fn offset(&self, p: usize) -> T {
-        match BRANCHES.iter().position(|(_, lever)| *lever == p) {
-            Some(k) => self.lever_offset.get(k).copied().unwrap_or(T::zero()),
-            None => T::zero(),
+        let [(_, l6), (_, l8)] = BRANCHES;
+        let [o6, o8] = self.lever_offset;
+        if p == l6 {
+            o6
+        } else if p == l8 {
+            o8
+        } else {
+            T::zero()
         }
     }
 

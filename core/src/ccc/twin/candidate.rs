@@ -263,7 +263,7 @@ impl<T: Real> Twin<T> {
         load: &Load<'_, T>,
     ) -> Option<T> {
         let time = w.t.to_f64();
-        let drive = self.drive;
+        let (drive, lossy) = (self.drive, self.lossy);
         let (cand, params) = self.scratch(w.switched);
         let q = match cand.reposition(params, m, coords, load.pose, time) {
             Ok(q) => q,
@@ -278,7 +278,13 @@ impl<T: Real> Twin<T> {
         let mut y = w.y;
         load_state(cand, &q, omega, &mut y);
         if cand
-            .eval(w.t, &y, load.inputs, drive, &params.friction)
+            .eval(
+                w.t,
+                &y,
+                load.inputs,
+                drive,
+                lossy.then_some(&params.friction),
+            )
             .is_err()
         {
             return None;

@@ -172,7 +172,13 @@ impl<T: Real> Twin<T> {
             if self
                 .slots
                 .reference_mut()
-                .eval(t, yr, inputs, d, &self.params.friction)
+                .eval(
+                    t,
+                    yr,
+                    inputs,
+                    d,
+                    self.lossy.then_some(&self.params.friction),
+                )
                 .is_err()
             {
                 // The workspace holds no evaluation: the next screen evaluates again.

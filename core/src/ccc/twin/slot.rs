@@ -303,7 +303,7 @@ impl<T: Real> Slot<T> {
         y: &SVector<T, STATE>,
         inputs: &Inputs<T>,
         drive: T,
-        friction: &Friction<T>,
+        friction: Option<&Friction<T>>,
     ) -> Result<(), StepError> {
         let n = self.map.dof.min(2);
         let s = y.as_slice();
@@ -334,7 +334,7 @@ impl<T: Real> Slot<T> {
                 *m -= drive * inputs.load;
             }
         }
-        if friction.active() {
+        if let Some(friction) = friction {
             let mut moments = self.ws.applied_moment;
             self.losses(friction, |body, tau, _| {
                 if body != 0 {
@@ -416,7 +416,7 @@ impl<T: Real> Slot<T> {
         y: &SVector<T, STATE>,
         inputs: &Inputs<T>,
         drive: T,
-        friction: &Friction<T>,
+        friction: Option<&Friction<T>>,
     ) -> SVector<T, STATE> {
         let mut dy = SVector::<T, STATE>::zeros();
         let n = self.map.dof.min(2);
@@ -433,7 +433,7 @@ impl<T: Real> Slot<T> {
             .copied()
             .unwrap_or(T::zero());
         let mut loss = T::zero();
-        if friction.active() {
+        if let Some(friction) = friction {
             // The crank's applied moment holds its joints' friction as well: the
             // motor's alone is its power.
             self.losses(friction, |body, tau, w| {
@@ -448,7 +448,7 @@ impl<T: Real> Slot<T> {
             let ws = self.ws.body.get(b as usize).map_or(T::zero(), |b| b.omega);
             dy[W_LOAD] = inputs.load * drive * ws;
         }
-        if friction.active() {
+        if friction.is_some() {
             // Each loss visits its two bodies: half the sum is its power.
             dy[W_LOAD] += loss * T::c(0.5);
         }
@@ -543,7 +543,7 @@ impl<T: Real> Slot<T> {
             let cog = u * (len * T::c(0.5));
             let weight = params.gravity * params.link(lever).mass;
             let mut m = cross(&tip, &self.rod_force_on_lever(rod, lever)) + cross(&cog, &weight);
-            if params.friction.active() {
+            if pin_friction_on(&params.friction, lever) {
                 // The friction at the lever's pin (G, I) acts on it beside the rod's
                 // force: joint (lever, rod) of FRICTION_JOINTS.
                 let rod_w = links.get(rod).map_or(T::zero(), |r| r.omega);
@@ -664,6 +664,16 @@ pub const JOINTS: [(u8, u8); 11] = [
     (8, 0),
 ];
 
+/// Whether lever `lever`'s pin (G, I) has friction.
+fn pin_friction_on<T: Real>(f: &Friction<T>, lever: usize) -> bool {
+    let k = FRICTION_JOINTS
+        .iter()
+        .position(|(i, _)| *i as usize == lever)
+        .unwrap_or(0);
+    let on = |x: Option<&T>| x.is_some_and(|x| *x != T::zero());
+    on(f.viscous.get(k)) || on(f.coulomb.get(k))
+}
+
 /// The friction torque at lever `lever`'s pin (G for 6, I for 8) against the lever's
 /// speed relative to its rod `w`, rad/s (the torque on the lever is minus this), N·m.
 pub(crate) fn pin_friction<T: Real>(f: &Friction<T>, lever: usize, w: T) -> T {
@@ -684,7 +694,7 @@ pub(crate) struct Equations<'a, T: Real> {
     pub slot: &'a mut Slot<T>,
     pub inputs: &'a Inputs<T>,
     pub drive: T,
-    pub friction: &'a Friction<T>,
+    pub friction: Option<&'a Friction<T>>,
 }
 
 impl<T: Real> OdeSystem<T, STATE> for Equations<'_, T> {
