@@ -532,7 +532,8 @@ impl<T: Real> Slot<T> {
     pub fn clutch_torques(&self, params: &CccParams<T>, links: &[LinkState<T>; 9]) -> [T; 2] {
         let d = params.drive.sign::<T>();
         let mut c = [T::zero(); 2];
-        for ((ck, (rod, lever)), clutch) in c.iter_mut().zip(BRANCHES).zip(self.mode.clutches()) {
+        let branches = c.iter_mut().zip(BRANCHES).zip(self.mode.clutches());
+        for (k, ((ck, (rod, lever)), clutch)) in branches.enumerate() {
             if clutch == Clutch::Free {
                 continue;
             }
@@ -543,11 +544,11 @@ impl<T: Real> Slot<T> {
             let cog = u * (len * T::c(0.5));
             let weight = params.gravity * params.link(lever).mass;
             let mut m = cross(&tip, &self.rod_force_on_lever(rod, lever)) + cross(&cog, &weight);
-            if pin_friction_on(&params.friction, lever) {
+            if let Some((cv, mu)) = pin_friction(&params.friction, k) {
                 // The friction at the lever's pin (G, I) acts on it beside the rod's
-                // force: joint (lever, rod) of FRICTION_JOINTS.
+                // force: the torque on the lever, its speed relative to the rod's.
                 let rod_w = links.get(rod).map_or(T::zero(), |r| r.omega);
-                m -= pin_friction(&params.friction, lever, s.omega - rod_w);
+                m -= params.friction.joint_torque(cv, mu, s.omega - rod_w);
             }
             *ck = d * (m - params.lever_inertia_about_h(lever) * s.alpha);
         }
@@ -664,26 +665,28 @@ pub const JOINTS: [(u8, u8); 11] = [
     (8, 0),
 ];
 
-/// Whether lever `lever`'s pin (G, I) has friction.
-fn pin_friction_on<T: Real>(f: &Friction<T>, lever: usize) -> bool {
-    let k = FRICTION_JOINTS
-        .iter()
-        .position(|(i, _)| *i as usize == lever)
-        .unwrap_or(0);
-    let on = |x: Option<&T>| x.is_some_and(|x| *x != T::zero());
-    on(f.viscous.get(k)) || on(f.coulomb.get(k))
-}
+/// The index in [`FRICTION_JOINTS`] of each lever's pin (G of lever 6, I of lever 8:
+/// `(lever, rod)`, in `BRANCHES` order).
+const PIN_JOINTS: [usize; 2] = [7, 8];
+const _: () = {
+    let [(r5, l6), (r7, l8)] = BRANCHES;
+    let [g, i] = PIN_JOINTS;
+    assert!(
+        FRICTION_JOINTS[g].0 as usize == l6 && FRICTION_JOINTS[g].1 as usize == r5,
+        "G is lever 6 on rod 5"
+    );
+    assert!(
+        FRICTION_JOINTS[i].0 as usize == l8 && FRICTION_JOINTS[i].1 as usize == r7,
+        "I is lever 8 on rod 7"
+    );
+};
 
-/// The friction torque at lever `lever`'s pin (G for 6, I for 8) against the lever's
-/// speed relative to its rod `w`, rad/s (the torque on the lever is minus this), N·m.
-pub(crate) fn pin_friction<T: Real>(f: &Friction<T>, lever: usize, w: T) -> T {
-    let k = FRICTION_JOINTS
-        .iter()
-        .position(|(i, _)| *i as usize == lever)
-        .unwrap_or(0);
-    let c = f.viscous.get(k).copied().unwrap_or(T::zero());
-    let mu = f.coulomb.get(k).copied().unwrap_or(T::zero());
-    f.joint_torque(c, mu, w)
+/// The viscous and dry coefficients at branch `k`'s lever pin, if it has any friction.
+fn pin_friction<T: Real>(f: &Friction<T>, k: usize) -> Option<(T, T)> {
+    let j = PIN_JOINTS.get(k).copied().unwrap_or(0);
+    let c = f.viscous.get(j).copied().unwrap_or(T::zero());
+    let mu = f.coulomb.get(j).copied().unwrap_or(T::zero());
+    (c != T::zero() || mu != T::zero()).then_some((c, mu))
 }
 
 /// Names of [`JOINTS`], for CSV headers.
