@@ -26,6 +26,10 @@
 //! `twin-f32-at` and `twin-f32-log` are the same in f32; `STEPS_H=1e-3` in the
 //! environment sets the step (1e-4 s without it).
 //!
+//! `STEPS_FRICTION=1` in the environment turns the losses of a real machine on (every
+//! joint 0.02 N·m·s/rad viscous and 0.05 N·m dry, ε = 0.01 rad/s, the clutches' drag
+//! 0.05 N·m·s/rad): the cost of the friction terms.
+//!
 //! `twin-f64-log` lists S2's steps (first second) that hold an event, a coordinate
 //! switch or a mode change: the indices to give `twin-f64-at`.
 //! With `STEPS_LOG` set in the environment, the core's `log` records (debug level:
@@ -38,6 +42,17 @@ use structomat::mechanisms::five_bar;
 use structomat::motor::Motor;
 use structomat::Real;
 
+/// SPEC's converter, with the losses of `STEPS_FRICTION` (see the top).
+fn params<T: Real>() -> CccParams<T> {
+    let mut p = CccParams::reference();
+    if std::env::var("STEPS_FRICTION").is_ok() {
+        p.friction.viscous = [T::c(0.02); 9];
+        p.friction.coulomb = [T::c(0.05); 9];
+        p.friction.clutch_drag = T::c(0.05);
+    }
+    p
+}
+
 fn twin<T: Real>(steps: u32) -> Result<T, String> {
     let inputs = Inputs {
         motor: MotorInput::Law(Motor::Constant(T::c(12.0))),
@@ -45,8 +60,7 @@ fn twin<T: Real>(steps: u32) -> Result<T, String> {
         measured: None,
     };
     let settings = TwinSettings::reference(T::c(1e-4));
-    let mut twin =
-        Box::new(Twin::new(CccParams::reference(), settings, inputs).map_err(|e| e.to_string())?);
+    let mut twin = Box::new(Twin::new(params(), settings, inputs).map_err(|e| e.to_string())?);
     for _ in 0..steps {
         twin.step(black_box(&inputs)).map_err(|e| e.to_string())?;
     }
@@ -76,12 +90,7 @@ fn twin_at<T: Real>(at: u32, n: u32, log: bool) -> Result<T, String> {
         .and_then(|h| h.parse::<f64>().ok())
         .unwrap_or(1e-4);
     let mut twin = Box::new(
-        Twin::new(
-            CccParams::reference(),
-            TwinSettings::reference(T::c(h)),
-            inputs,
-        )
-        .map_err(|e| e.to_string())?,
+        Twin::new(params(), TwinSettings::reference(T::c(h)), inputs).map_err(|e| e.to_string())?,
     );
     for k in 0..at {
         let before = (twin.mode(), twin.coordinates());

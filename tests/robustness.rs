@@ -1521,6 +1521,8 @@ fn case_twin_geometry<T: Real>(seed: u64, tally: &mut Tally) -> Result<(), Strin
         } else {
             DriveDirection::Ccw
         },
+        // The losses stay off: this fuzzes SPEC's ideal machine.
+        friction: structomat::ccc::Friction::none(),
         gravity: g.v2(r.gravity.x, r.gravity.y),
         branch_c: side(&mut g, r.branch_c),
         branch_g: side(&mut g, r.branch_g),

@@ -559,3 +559,59 @@ fn the_adaptive_integrator_between_output_times() {
     let last = text.lines().last().unwrap();
     assert!(last.starts_with("0.5,"), "{last}");
 }
+
+/// `[converter.friction]` by dotted keys (as a sweep's `[set]` and axes write them):
+/// each joint's coefficient lands on its joint, absent ones stay 0, and a bad value or
+/// an unknown joint is refused by its key.
+#[test]
+fn friction_keys_by_dotted_path() {
+    use structomat::ccc::FRICTION_JOINT_NAMES;
+    let text = ScenarioId::CccS2.file_text();
+    let tree = parse_value(text, "ccc-s2.toml").unwrap();
+    let mut t = tree.clone();
+    let set = |t: &mut toml::Value, k: &str, v: f64| {
+        set_dotted(t, k, toml::Value::Float(v)).unwrap();
+    };
+    set(&mut t, "converter.friction.viscous.A", 0.5);
+    set(&mut t, "converter.friction.viscous.D7", 0.25);
+    set(&mut t, "converter.friction.coulomb.G", 1.5);
+    set(&mut t, "converter.friction.clutch_drag", 0.125);
+    set(&mut t, "converter.friction.coulomb_eps", 0.02);
+    let f = run_file_from_value(t, "job").unwrap();
+    let Body::Converter(c) = &f.body else {
+        panic!("converter")
+    };
+    let fr = c.params.friction;
+    let at = |name: &str| {
+        FRICTION_JOINT_NAMES
+            .iter()
+            .position(|n| *n == name)
+            .unwrap()
+    };
+    let mut viscous = [0.0; 9];
+    viscous[at("A")] = 0.5;
+    viscous[at("D7")] = 0.25;
+    let mut coulomb = [0.0; 9];
+    coulomb[at("G")] = 1.5;
+    assert_eq!(
+        (fr.viscous, fr.coulomb, fr.clutch_drag, fr.coulomb_eps),
+        (viscous, coulomb, 0.125, 0.02)
+    );
+    assert_eq!(c.params::<f32>().friction.coulomb[at("G")], 1.5f32);
+    for (key, value, says) in [
+        ("converter.friction.viscous.B", -1.0, "must be >= 0, got -1"),
+        ("converter.friction.coulomb.I", f64::NAN, "finite"),
+        ("converter.friction.clutch_drag", -0.5, "must be >= 0"),
+        ("converter.friction.coulomb_eps", 0.0, "must be > 0"),
+    ] {
+        let mut bad = tree.clone();
+        set(&mut bad, key, value);
+        let e = run_file_from_value(bad, "job").unwrap_err();
+        assert_eq!(e.field, key, "{e}");
+        assert!(e.to_string().contains(says), "{e}");
+    }
+    let mut bad = tree;
+    set(&mut bad, "converter.friction.viscous.H6", 1.0);
+    let e = run_file_from_value(bad, "job").unwrap_err().to_string();
+    assert!(e.contains("unknown field `H6`") && e.contains("D5"), "{e}");
+}

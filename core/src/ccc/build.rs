@@ -44,9 +44,11 @@ const _: () = assert!(crate::config::MAX_LINK_POINTS >= 3, "the rocker carries D
 pub(crate) struct BodyMap<T> {
     /// Model body of physical link `p` (index `p`, 1..=8); 0 for a locked lever.
     pub body: [u8; 9],
-    /// Angle of physical link `p` minus its model body's angle (lever 8 in A68); for a
-    /// locked lever, its fixed angle, rad.
-    pub offset: [T; 9],
+    /// Angle of lever 6 and of lever 8 (`BRANCHES` order) minus its model body's angle
+    /// (lever 8 in A68); for a locked lever, its fixed angle, rad. The other links are
+    /// their bodies (offset 0): two values, not nine, keep the three slots of
+    /// `Twin<f32>` within its RAM budget.
+    pub lever_offset: [T; 2],
     /// Physical link of each model body (index: body), for naming groups.
     pub phys: [u8; MAX_BODIES],
     /// The physical link whose angle each coordinate is.
@@ -87,6 +89,20 @@ pub fn mode_model<T: Real>(
 }
 
 impl<T: Real> BodyMap<T> {
+    /// Angle of physical link `p` minus its model body's angle; for a locked lever,
+    /// its fixed angle, rad (0 for every link but the levers).
+    pub(crate) fn offset(&self, p: usize) -> T {
+        let [(_, l6), (_, l8)] = BRANCHES;
+        let [o6, o8] = self.lever_offset;
+        if p == l6 {
+            o6
+        } else if p == l8 {
+            o8
+        } else {
+            T::zero()
+        }
+    }
+
     /// The coordinates' values at the physical angles `pose` (unused slots 0).
     pub(crate) fn coordinates_at(&self, pose: &[T; 9]) -> [T; 2] {
         let mut q = [T::zero(); 2];
@@ -148,7 +164,7 @@ fn declare<T: Real, C: Capacity<T>, M: DerefMut<Target = Model<T, C>>>(
     let h = b.ground_point(p.h.x, p.h.y)?;
     let mut map = BodyMap {
         body: [0; 9],
-        offset: [T::zero(); 9],
+        lever_offset: [T::zero(); 2],
         phys: [0; MAX_BODIES],
         coord_link: [0; 2],
         dof: mode.dof(),
@@ -161,7 +177,7 @@ fn declare<T: Real, C: Capacity<T>, M: DerefMut<Target = Model<T, C>>>(
         if clutches[k] == Clutch::Locked {
             let at = lever_point(p, *lever, th(*lever));
             pin[k] = Some(b.ground_point(at.x, at.y)?);
-            if let Some(o) = map.offset.get_mut(*lever) {
+            if let Some(o) = map.lever_offset.get_mut(k) {
                 *o = th(*lever);
             }
         }
@@ -175,7 +191,7 @@ fn declare<T: Real, C: Capacity<T>, M: DerefMut<Target = Model<T, C>>>(
             }
             if joined && k == 8 {
                 map.body[8] = map.body[6];
-                map.offset[8] = th(8) - th(6);
+                map.lever_offset[1] = th(8) - th(6);
                 continue;
             }
         }

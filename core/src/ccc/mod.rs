@@ -9,7 +9,9 @@ pub mod params;
 
 pub use build::{initial_pose, mode_model};
 pub use mode::{Clutch, Coordinates, Mode};
-pub use params::{Bar, CccParams, DriveDirection, Side};
+pub use params::{
+    Bar, CccParams, DriveDirection, Friction, Side, FRICTION_JOINTS, FRICTION_JOINT_NAMES,
+};
 mod twin;
 
 pub use twin::{

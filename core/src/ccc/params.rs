@@ -70,6 +70,9 @@ pub struct CccParams<T> {
     pub mass_at: T,
     /// Output shaft inertia J_s, kg·m² (SPEC: 0, the thesis has none).
     pub shaft_inertia: T,
+    /// The losses of a real machine (SPEC 5): joint friction and clutch drag, all 0 by
+    /// default (SPEC's ideal machine).
+    pub friction: Friction<T>,
     /// The direction the shaft turns.
     pub drive: DriveDirection,
     /// Gravity, m/s².
@@ -110,6 +113,7 @@ impl<T: Real> CccParams<T> {
             mass_inertia: c(0.0400),
             mass_at: c(0.700),
             shaft_inertia: c(0.0),
+            friction: Friction::none(),
             drive: DriveDirection::Cw,
             gravity: Vec2::new(c(0.0), c(-9.81)),
             branch_c: Side::Right,
@@ -182,6 +186,7 @@ impl<T: Real> CccParams<T> {
                 return Err(ModelError::Negative(what));
             }
         }
+        self.friction.validate()?;
         if !(self.rocker_d > T::zero()) {
             return Err(ModelError::NotPositive("D on the rocker"));
         }
@@ -212,6 +217,149 @@ impl<T: Real> CccParams<T> {
         Ok(())
     }
 }
+
+/// The converter's revolute joints that carry joint friction, as `(i, j)`: link `i`
+/// turns on link `j` (0: the ground), its relative speed `ω_i − ω_j`. SPEC's letters
+/// ([`FRICTION_JOINT_NAMES`]): A, B, C, E, F, D (rod 5), D (rod 7), G, I. The levers'
+/// joints at H are the one-way clutches: their loss is the clutch drag.
+pub const FRICTION_JOINTS: [(u8, u8); 9] = [
+    (1, 0),
+    (2, 1),
+    (3, 2),
+    (3, 4),
+    (4, 0),
+    (5, 3),
+    (7, 3),
+    (6, 5),
+    (8, 7),
+];
+
+/// SPEC's letters for [`FRICTION_JOINTS`] (as the joint reactions' names).
+pub const FRICTION_JOINT_NAMES: [&str; 9] = ["A", "B", "C", "E", "F", "D5", "D7", "G", "I"];
+
+/// The losses of a real machine (SPEC 5), 0 by default. At each revolute joint of
+/// [`FRICTION_JOINTS`], of relative speed `w` (rad/s), the torque on its link `i` is
+/// `-(viscous·w + coulomb·w/√(w² + ε²))` and the opposite on link `j` (none on the
+/// ground); an overrunning (free) lever `k` feels `-clutch_drag·(ω_k − ω_shaft)` and
+/// the shaft the opposite (a held shaft: the brake takes it). An engaged or locked
+/// clutch has no slip and no drag.
+///
+/// The dry friction is regularized: `w/√(w² + ε²)` stands for `sgn(w)`, with
+/// `ε = coulomb_eps` (rad/s) the relative speed under which the joint behaves as a
+/// viscous one of coefficient `coulomb/ε`. Its errors: a joint that should stick under a
+/// torque `T` below `coulomb` creeps at `w = ε·T/√(coulomb² − T²)`; one sliding at `w`
+/// gets `coulomb·(1 − |w|/√(w² + ε²)) ≤ coulomb·ε²/(2w²)` less than `coulomb`. The
+/// regularization's stiffness `coulomb/ε` must stay within the explicit integrator's
+/// reach: `h·coulomb/(ε·J) ≲ 3` with `J` the smallest inertia the joint's speed sees
+/// (a smaller `ε` makes the twin redo its steps in sub-steps, then fail).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Friction<T> {
+    /// Viscous coefficient of each joint of [`FRICTION_JOINTS`], N·m·s/rad.
+    pub viscous: [T; 9],
+    /// Dry (Coulomb) friction torque of each joint of [`FRICTION_JOINTS`], N·m.
+    pub coulomb: [T; 9],
+    /// The dry friction's regularization speed ε, rad/s (> 0).
+    pub coulomb_eps: T,
+    /// The overrunning clutches' drag coefficient, N·m·s/rad.
+    pub clutch_drag: T,
+}
+
+impl<T: Real> Friction<T> {
+    /// No losses: SPEC's ideal machine (ε at its default, 0.01 rad/s).
+    pub fn none() -> Self {
+        Friction {
+            viscous: [T::zero(); 9],
+            coulomb: [T::zero(); 9],
+            coulomb_eps: T::c(0.01),
+            clutch_drag: T::zero(),
+        }
+    }
+
+    /// Whether any loss is on: with none the twin skips every friction term (the same
+    /// bits as a machine without the field).
+    pub fn active(&self) -> bool {
+        let on = |x: &T| *x != T::zero();
+        self.clutch_drag != T::zero() || self.viscous.iter().any(on) || self.coulomb.iter().any(on)
+    }
+
+    /// The torque a joint of viscous coefficient `c` and dry friction `mu` applies
+    /// against its relative speed `w` (the torque on its link `i` is minus this), N·m.
+    pub fn joint_torque(&self, c: T, mu: T, w: T) -> T {
+        let mut tau = c * w;
+        if mu != T::zero() {
+            tau += mu * w / (w * w + self.coulomb_eps * self.coulomb_eps).sqrt();
+        }
+        tau
+    }
+
+    /// Every coefficient finite and non-negative, ε positive; errors name the
+    /// coefficient by its run-file key.
+    pub fn validate(&self) -> Result<(), ModelError> {
+        let check = |x: T, what: &'static str| {
+            if !x.finite() {
+                Err(ModelError::NonFinite(what))
+            } else if x < T::zero() {
+                Err(ModelError::Negative(what))
+            } else {
+                Ok(())
+            }
+        };
+        for (k, (c, mu)) in self.viscous.iter().zip(self.coulomb.iter()).enumerate() {
+            let names = FRICTION_KEYS
+                .get(k)
+                .copied()
+                .unwrap_or(["friction", "friction"]);
+            check(*c, names[0])?;
+            check(*mu, names[1])?;
+        }
+        check(self.clutch_drag, "converter.friction.clutch_drag")?;
+        check(self.coulomb_eps, "converter.friction.coulomb_eps")?;
+        if !(self.coulomb_eps > T::zero()) {
+            return Err(ModelError::NotPositive("converter.friction.coulomb_eps"));
+        }
+        Ok(())
+    }
+}
+
+/// The run-file keys of each joint's viscous and dry coefficients, for errors.
+const FRICTION_KEYS: [[&str; 2]; 9] = [
+    [
+        "converter.friction.viscous.A",
+        "converter.friction.coulomb.A",
+    ],
+    [
+        "converter.friction.viscous.B",
+        "converter.friction.coulomb.B",
+    ],
+    [
+        "converter.friction.viscous.C",
+        "converter.friction.coulomb.C",
+    ],
+    [
+        "converter.friction.viscous.E",
+        "converter.friction.coulomb.E",
+    ],
+    [
+        "converter.friction.viscous.F",
+        "converter.friction.coulomb.F",
+    ],
+    [
+        "converter.friction.viscous.D5",
+        "converter.friction.coulomb.D5",
+    ],
+    [
+        "converter.friction.viscous.D7",
+        "converter.friction.coulomb.D7",
+    ],
+    [
+        "converter.friction.viscous.G",
+        "converter.friction.coulomb.G",
+    ],
+    [
+        "converter.friction.viscous.I",
+        "converter.friction.coulomb.I",
+    ],
+];
 
 /// The names of each link's length, mass and inertia in errors (SPEC 3's numbering).
 const LINK_FIELDS: [[&str; 3]; 8] = [

@@ -93,7 +93,11 @@ Run files (TOML; the full reference with every key: host-sim/scenarios/README.md
   The converter: [converter] a, f, h (pivots A, F and shaft H), [[converter.link]] x 8
     (length, mass, inertia), rocker_d, mass, mass_inertia, mass_at, shaft_inertia,
     drive = \"cw\"|\"ccw\", gravity, branch_c, branch_g, branch_i = \"left\"|\"right\",
-    crank_deg, swing_deg, crank_speed, swing_speed
+    crank_deg, swing_deg, crank_speed, swing_speed; [converter.friction] (all 0 by
+    default): viscous = { A, B, C, E, F, D5, D7, G, I } (N·m·s/rad on each joint's
+    relative speed), coulomb = { ... } (dry friction, N·m), coulomb_eps (its
+    regularization speed, rad/s, default 0.01), clutch_drag (N·m·s/rad, an overrunning
+    clutch's slip)
   [run] h, t_end (s), every, f32, integrator = \"dp5\" (the fixed-step Dormand-Prince,
     step h; the default) or \"adaptive\" (the adaptive DP5(4) between output times h
     apart, with rtol, atol (default 1e-9 each) and h_max (default 10 h); mechanisms

@@ -23,7 +23,7 @@ use crate::error::Sci;
 use serde::Deserialize;
 use std::collections::BTreeMap;
 use std::fmt;
-use structomat::ccc::{Bar, CccParams, DriveDirection, Side};
+use structomat::ccc::{Bar, CccParams, DriveDirection, Friction, Side, FRICTION_JOINT_NAMES};
 use structomat::config::{MAX_DOF, MAX_GROUND_POINTS, MAX_LINKS, MAX_LINK_POINTS, MAX_LOADS};
 use structomat::motor::{rpm, Asynchronous, Motor};
 use structomat::scalar::Vec2;
@@ -476,6 +476,12 @@ impl Converter {
             mass_inertia: c(p.mass_inertia),
             mass_at: c(p.mass_at),
             shaft_inertia: c(p.shaft_inertia),
+            friction: Friction {
+                viscous: p.friction.viscous.map(c),
+                coulomb: p.friction.coulomb.map(c),
+                coulomb_eps: c(p.friction.coulomb_eps),
+                clutch_drag: c(p.friction.clutch_drag),
+            },
             drive: p.drive,
             gravity: v(p.gravity),
             branch_c: p.branch_c,
@@ -623,6 +629,7 @@ struct RawConverter {
     mass_inertia: f64,
     mass_at: f64,
     shaft_inertia: f64,
+    friction: Option<RawFriction>,
     drive: RawDrive,
     gravity: [f64; 2],
     branch_c: RawSide,
@@ -632,6 +639,75 @@ struct RawConverter {
     swing_deg: Option<f64>,
     crank_speed: Option<f64>,
     swing_speed: Option<f64>,
+}
+
+/// `[converter.friction]`: the losses of a real machine (SPEC 5), each 0 when absent.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawFriction {
+    viscous: Option<RawJoints>,
+    coulomb: Option<RawJoints>,
+    coulomb_eps: Option<f64>,
+    clutch_drag: Option<f64>,
+}
+
+/// A coefficient per revolute joint of the converter, by SPEC's letter
+/// ([`FRICTION_JOINT_NAMES`]); the levers' joints at H are the clutches.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+#[allow(non_snake_case)]
+struct RawJoints {
+    A: Option<f64>,
+    B: Option<f64>,
+    C: Option<f64>,
+    E: Option<f64>,
+    F: Option<f64>,
+    D5: Option<f64>,
+    D7: Option<f64>,
+    G: Option<f64>,
+    I: Option<f64>,
+}
+
+impl RawJoints {
+    /// In [`FRICTION_JOINT_NAMES`]' order, absent ones `None`.
+    fn values(&self) -> [Option<f64>; 9] {
+        [
+            self.A, self.B, self.C, self.E, self.F, self.D5, self.D7, self.G, self.I,
+        ]
+    }
+}
+
+/// The friction of `[converter.friction]`, validated: every coefficient finite and
+/// non-negative, ε positive; errors name the key (`converter.friction.viscous.A`).
+fn friction_of(ck: &Check<'_>, raw: Option<&RawFriction>) -> Result<Friction<f64>, FileError> {
+    let mut f = Friction::<f64>::none();
+    let Some(raw) = raw else {
+        return Ok(f);
+    };
+    for (table, kind, out) in [
+        (&raw.viscous, "viscous", &mut f.viscous),
+        (&raw.coulomb, "coulomb", &mut f.coulomb),
+    ] {
+        let Some(joints) = table else {
+            continue;
+        };
+        for ((slot, value), name) in out
+            .iter_mut()
+            .zip(joints.values())
+            .zip(FRICTION_JOINT_NAMES)
+        {
+            if let Some(v) = value {
+                *slot = ck.non_negative(&format!("converter.friction.{kind}.{name}"), v)?;
+            }
+        }
+    }
+    if let Some(v) = raw.clutch_drag {
+        f.clutch_drag = ck.non_negative("converter.friction.clutch_drag", v)?;
+    }
+    if let Some(v) = raw.coulomb_eps {
+        f.coulomb_eps = ck.positive("converter.friction.coulomb_eps", v)?;
+    }
+    Ok(f)
 }
 
 #[derive(Deserialize, Clone, Copy, PartialEq, Eq)]
@@ -1038,6 +1114,7 @@ fn converter(ck: &Check<'_>, c: RawConverter, run: &RawRun) -> Result<Converter,
         mass_inertia: ck.non_negative("converter.mass_inertia", c.mass_inertia)?,
         mass_at: ck.non_negative("converter.mass_at", c.mass_at)?,
         shaft_inertia: ck.non_negative("converter.shaft_inertia", c.shaft_inertia)?,
+        friction: friction_of(ck, c.friction.as_ref())?,
         drive: match c.drive {
             RawDrive::Cw => DriveDirection::Cw,
             RawDrive::Ccw => DriveDirection::Ccw,

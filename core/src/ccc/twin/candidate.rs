@@ -45,7 +45,10 @@ impl<T: Real> Twin<T> {
         // thresholds: the signs that decide then read the same from either (they
         // differ by rounding), and the screen's torques stand for the model's until
         // the next full evaluation (8.3k instructions of S2's worst event step).
-        let clear = screened.filter(|c| torques_clear(m, c, inputs));
+        // (Not with clutch drag: the held shaft's torque condition then has the
+        // overrunning levers' drag as well, which `torques_clear` does not see.)
+        let no_drag = self.params.friction.clutch_drag == T::zero();
+        let clear = screened.filter(|c| no_drag && torques_clear(m, c, inputs));
         let place = placed.map_or(Place::Scratch, |(p, _)| p);
         let (cand, params) = match place {
             Place::Reference => (self.slots.reference_mut(), &self.params),
@@ -260,7 +263,7 @@ impl<T: Real> Twin<T> {
         load: &Load<'_, T>,
     ) -> Option<T> {
         let time = w.t.to_f64();
-        let drive = self.drive;
+        let (drive, lossy) = (self.drive, self.lossy);
         let (cand, params) = self.scratch(w.switched);
         let q = match cand.reposition(params, m, coords, load.pose, time) {
             Ok(q) => q,
@@ -274,7 +277,16 @@ impl<T: Real> Twin<T> {
         let omega = load.omega;
         let mut y = w.y;
         load_state(cand, &q, omega, &mut y);
-        if cand.eval(w.t, &y, load.inputs, drive).is_err() {
+        if cand
+            .eval(
+                w.t,
+                &y,
+                load.inputs,
+                drive,
+                lossy.then_some(&params.friction),
+            )
+            .is_err()
+        {
             return None;
         }
         let mapped = cand.links(params);

@@ -109,7 +109,13 @@ impl<T: Real> Twin<T> {
         }
         self.slots
             .reference_mut()
-            .eval(w.t, &yr, inputs, self.drive)
+            .eval(
+                w.t,
+                &yr,
+                inputs,
+                self.drive,
+                self.lossy.then_some(&self.params.friction),
+            )
             .map_err(|e| self.physical_error(e))?;
         let js = self.params.shaft_inertia;
         let with_shaft = js > T::zero();

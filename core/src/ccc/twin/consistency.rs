@@ -72,6 +72,11 @@ impl<T: Real> Twin<T> {
                     // A free lever touching the shaft must not pass it in the drive
                     // direction.
                     let l = links.get(*lever).copied().unwrap_or_default();
+                    let drag = self.params.friction.clutch_drag;
+                    if drag != T::zero() && !m.shaft_turning() && m != Mode::Free {
+                        // Its drag on the held shaft, which the brake holds as well.
+                        locked += d * drag * l.omega;
+                    }
                     let rel_w = l.omega - shaft_speed(m, links);
                     if rel_w.abs() <= tol_w {
                         let rel = d * (l.alpha - shaft_alpha);
@@ -87,6 +92,43 @@ impl<T: Real> Twin<T> {
             v += (-d * shaft_alpha - tol_a).max(T::zero()) / alpha_scale;
         }
         v
+    }
+
+    /// Turns the clutch drag in the reference's generalized forces `rhs` (both levers
+    /// overrunning a held shaft, at the reference's evaluated speeds) into mode `m`'s at
+    /// the speeds `u_plus`: none on a locked or engaged lever, `-drag·(ω_k − ω_s)` on an
+    /// overrunning one and the opposite on a turning shaft (`ω_s` the engaged lever's
+    /// speed; a held shaft's brake takes it).
+    fn drag_as_in(&self, m: Mode, u_plus: &SVector<T, 3>, drag: T, rhs: &mut SVector<T, 6>) {
+        let r = self.slots.reference();
+        let speed = |lever: usize| {
+            let v = r.omega_row(lever);
+            v[0] * u_plus[0] + v[1] * u_plus[1]
+        };
+        let clutches = m.clutches();
+        let ws = if m.shaft_turning() {
+            BRANCHES
+                .iter()
+                .zip(clutches.iter())
+                .find(|(_, c)| **c == Clutch::Engaged)
+                .map_or(T::zero(), |((_, lever), _)| speed(*lever))
+        } else {
+            T::zero()
+        };
+        for ((_, lever), clutch) in BRANCHES.iter().zip(clutches.iter()) {
+            let v = r.omega_row(*lever);
+            // Take out the reference's drag on this lever, put in the mode's.
+            let mut on_lever = drag * r.omega_of(*lever);
+            if *clutch == Clutch::Free {
+                let slip = drag * (speed(*lever) - ws);
+                on_lever -= slip;
+                if m.shaft_turning() {
+                    rhs[2] += slip;
+                }
+            }
+            rhs[0] += v[0] * on_lever;
+            rhs[1] += v[1] * on_lever;
+        }
     }
 
     /// Mode `m`'s violation of SPEC 3's consistency conditions (as
@@ -127,13 +169,24 @@ impl<T: Real> Twin<T> {
         if !(moved <= screen_margin::<T>() * T::c(1e-3) * scale) || (exact && moved != T::zero()) {
             yr[QD] = u_plus[0];
             yr[QD + 1] = u_plus[1];
-            if self.slots.reference_mut().eval(t, yr, inputs, d).is_err() {
+            if self
+                .slots
+                .reference_mut()
+                .eval(
+                    t,
+                    yr,
+                    inputs,
+                    d,
+                    self.lossy.then_some(&self.params.friction),
+                )
+                .is_err()
+            {
                 // The workspace holds no evaluation: the next screen evaluates again.
                 yr[QD] = T::c(f64::NAN);
                 return None;
             }
         }
-        let x = self.reference_kkt(m, inputs)?;
+        let x = self.reference_kkt(m, inputs, u_plus)?;
         let r = self.slots.reference();
         let row = |lever: usize| r.lever_row(lever);
         // The multipliers in the order of `constraint_rows`: one per locked or engaged
@@ -159,7 +212,12 @@ impl<T: Real> Twin<T> {
     /// accelerations (see [`Twin::screen`]), solved: `q̈` (with the shaft's) and the
     /// multipliers, in the order of `constraint_rows`; `None` if it is singular or its
     /// solution not finite.
-    fn reference_kkt(&self, m: Mode, inputs: &Inputs<T>) -> Option<SVector<T, 6>> {
+    fn reference_kkt(
+        &self,
+        m: Mode,
+        inputs: &Inputs<T>,
+        u_plus: &SVector<T, 3>,
+    ) -> Option<SVector<T, 6>> {
         let d = self.drive;
         let r = self.slots.reference();
         let row = |lever: usize| r.lever_row(lever);
@@ -180,6 +238,10 @@ impl<T: Real> Twin<T> {
         kkt[(2, 2)] = self.params.shaft_inertia;
         if m.shaft_turning() {
             rhs[2] = -d * inputs.load;
+        }
+        let drag = self.params.friction.clutch_drag;
+        if drag != T::zero() {
+            self.drag_as_in(m, u_plus, drag, &mut rhs);
         }
         // At most the three coordinates' worth of constraints (3 rows per mode).
         for (i, (a, b)) in rows.iter().zip(bias.iter()).take(3).enumerate() {

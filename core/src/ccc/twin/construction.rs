@@ -46,6 +46,7 @@ impl<T: Real> Twin<T> {
         )?;
         let mut twin = Twin {
             drive: params.drive.sign(),
+            lossy: params.friction.active(),
             params,
             settings,
             slots: Slots {
@@ -132,6 +133,7 @@ impl<T: Real> Twin<T> {
         // their in-place constructor, so `*p` is initialised before `assume_init_mut`.
         unsafe {
             addr_of_mut!((*p).drive).write(params.drive.sign());
+            addr_of_mut!((*p).lossy).write(params.friction.active());
             addr_of_mut!((*p).params).write(params);
             addr_of_mut!((*p).settings).write(settings);
             for s in elements(uninit(addr_of_mut!((*p).slots.s))) {
@@ -259,5 +261,6 @@ fn fields_of<T: Real>(t: &Twin<T>) {
         candidates: _,
         torque_source: _,
         at_rest: _,
+        lossy: _,
     } = t;
 }

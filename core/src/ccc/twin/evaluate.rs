@@ -98,7 +98,13 @@ impl<T: Real> Twin<T> {
     fn stage_motion(&mut self, w: &Work<T>, inputs: &Inputs<T>) -> Result<(), TwinStepError> {
         self.slots
             .cur_mut()
-            .eval(w.t, &w.y, inputs, self.drive)
+            .eval(
+                w.t,
+                &w.y,
+                inputs,
+                self.drive,
+                self.lossy.then_some(&self.params.friction),
+            )
             .map_err(|e| self.physical_error(e))
     }
 
@@ -145,7 +151,12 @@ impl<T: Real> Twin<T> {
     /// Hands the slot's evaluation at `w`'s state (made in full) to the DP5 stepper as
     /// the first stage of a step from there.
     pub(super) fn seed_first_stage(&mut self, w: &Work<T>, inputs: &Inputs<T>) {
-        let k1 = self.slots.cur().rates(&w.y, inputs, self.drive);
+        let k1 = self.slots.cur().rates(
+            &w.y,
+            inputs,
+            self.drive,
+            self.lossy.then_some(&self.params.friction),
+        );
         self.dp5.seed(w.t, &w.y, &k1);
     }
 

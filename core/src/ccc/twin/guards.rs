@@ -364,7 +364,14 @@ impl<T: Real> Twin<T> {
         for (k, ((_, lever), clutch)) in BRANCHES.iter().zip(mode.clutches()).enumerate() {
             let w = links.get(*lever).map_or(T::zero(), |s| s.omega);
             match clutch {
-                Clutch::Free => *g.get_mut(Guard::catch(k)) = Some(d * (w - shaft) - w_tol),
+                Clutch::Free => {
+                    *g.get_mut(Guard::catch(k)) = Some(d * (w - shaft) - w_tol);
+                    let drag = self.params.friction.clutch_drag;
+                    if drag != T::zero() && !mode.shaft_turning() {
+                        // Its drag on the held shaft, which the brake holds as well.
+                        locked += d * drag * w;
+                    }
+                }
                 Clutch::Locked => {
                     *g.get_mut(Guard::release(k)) = Some(-(c[k] + c_tol));
                     locked += c[k];

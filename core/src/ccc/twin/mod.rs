@@ -208,6 +208,9 @@ pub struct Twin<T: Real> {
     /// current slot's workspace, guards and clutch torques are the full evaluation of
     /// the committed state under the last step's inputs ([`Twin::repeats_at_rest`]).
     at_rest: bool,
+    /// Any of the losses of `params.friction` is on (`Friction::active`, taken once):
+    /// without, the equations skip every friction term.
+    lossy: bool,
 }
 
 /// The working state of a step, committed only when the whole step succeeds.
@@ -494,6 +497,7 @@ impl<T: Real> Twin<T> {
             slot: self.slots.cur_mut(),
             inputs,
             drive: self.drive,
+            friction: self.lossy.then_some(&self.params.friction),
         };
         let Err(e) = self.dp5.step(&mut sys, &mut w.t, &mut w.y, h) else {
             return Ok(true);

@@ -4,7 +4,7 @@
 
 use super::super::build::{build_into, BodyMap, BRANCHES, CRANK};
 use super::super::mode::{Clutch, Coordinates, Mode};
-use super::super::params::CccParams;
+use super::super::params::{CccParams, Friction, FRICTION_JOINTS};
 use super::capacity::Converter;
 use super::error::TwinStepError;
 use super::inputs::Inputs;
@@ -199,7 +199,7 @@ impl<T: Real> Slot<T> {
     fn declares(&self, pose: &[T; 9]) -> bool {
         let th = |p: usize| pose.get(p).copied().unwrap_or(T::zero());
         BRANCHES.iter().all(|(_, lever)| {
-            let off = self.map.offset.get(*lever).copied().unwrap_or(T::zero());
+            let off = self.map.offset(*lever);
             if self.body(*lever) == 0 {
                 return off == th(*lever);
             }
@@ -294,14 +294,16 @@ impl<T: Real> Slot<T> {
     }
 
     /// Evaluates the equations of motion at `(t, y)` with the inputs: kinematics, then
-    /// the motor torque on the crank (from its evaluated speed) and the load on the
-    /// engaged lever as applied moments, then `q̈`.
+    /// the motor torque on the crank (from its evaluated speed), the load on the
+    /// engaged lever and, when any is on, the losses `friction` (joint friction, clutch
+    /// drag) as applied moments, then `q̈`.
     pub fn eval(
         &mut self,
         t: T,
         y: &SVector<T, STATE>,
         inputs: &Inputs<T>,
         drive: T,
+        friction: Option<&Friction<T>>,
     ) -> Result<(), StepError> {
         let n = self.map.dof.min(2);
         let s = y.as_slice();
@@ -332,7 +334,69 @@ impl<T: Real> Slot<T> {
                 *m -= drive * inputs.load;
             }
         }
+        if let Some(friction) = friction {
+            let mut moments = self.ws.applied_moment;
+            self.losses(friction, |body, tau, _| {
+                if body != 0 {
+                    if let Some(m) = moments.get_mut(body as usize) {
+                        *m += tau;
+                    }
+                }
+            });
+            self.ws.applied_moment = moments;
+        }
         solve_accelerations(&self.model, &mut self.ws, t)
+    }
+
+    /// Physical link `p`'s angular speed at the last evaluation (0 for the ground and
+    /// a locked lever), rad/s.
+    pub fn omega_of(&self, p: usize) -> T {
+        match self.body(p) {
+            0 => T::zero(),
+            b => self.ws.body.get(b as usize).map_or(T::zero(), |s| s.omega),
+        }
+    }
+
+    /// The losses (SPEC 5) at the last evaluation's speeds: `visit(body, torque, w)`
+    /// for each torque (N·m) a loss applies to a model body (0: the ground, or a held
+    /// shaft), `w` (rad/s) the speed of that body relative to the other one the loss
+    /// acts between. Each loss visits its two bodies with opposite torques and speeds,
+    /// so `-Σ torque·w / 2` over the visits is the power it dissipates. Joint friction
+    /// at every joint of [`FRICTION_JOINTS`] with a coefficient; the drag of each
+    /// overrunning clutch against the shaft (the engaged lever's body in an A mode, the
+    /// held shaft in an I mode; none in the free mode, which has no diode).
+    fn losses(&self, f: &Friction<T>, mut visit: impl FnMut(u8, T, T)) {
+        for (k, (i, j)) in FRICTION_JOINTS.iter().enumerate() {
+            let c = f.viscous.get(k).copied().unwrap_or(T::zero());
+            let mu = f.coulomb.get(k).copied().unwrap_or(T::zero());
+            if c == T::zero() && mu == T::zero() {
+                continue;
+            }
+            let (i, j) = (*i as usize, *j as usize);
+            let w = self.omega_of(i) - self.omega_of(j);
+            let tau = f.joint_torque(c, mu, w);
+            visit(self.body(i), -tau, w);
+            visit(self.body(j), tau, -w);
+        }
+        if f.clutch_drag == T::zero() || self.mode == Mode::Free {
+            return;
+        }
+        let shaft = self.shaft_body().unwrap_or(0);
+        let ws = self
+            .ws
+            .body
+            .get(shaft as usize)
+            .map_or(T::zero(), |s| s.omega);
+        let ws = if shaft == 0 { T::zero() } else { ws };
+        for ((_, lever), clutch) in BRANCHES.iter().zip(self.mode.clutches()) {
+            if clutch != Clutch::Free {
+                continue;
+            }
+            let w = self.omega_of(*lever) - ws;
+            let tau = f.clutch_drag * w;
+            visit(self.body(*lever), -tau, w);
+            visit(shaft, tau, -w);
+        }
     }
 
     /// The kinematics at `y` up to the velocities only (see [`evaluate_velocities`]):
@@ -345,8 +409,15 @@ impl<T: Real> Slot<T> {
         evaluate_velocities(&self.model, &mut self.ws, q, qd, t.to_f64())
     }
 
-    /// `dy` of the state after [`Slot::eval`]: `q̇`, `q̈`, motor power, load power.
-    pub fn rates(&self, y: &SVector<T, STATE>, inputs: &Inputs<T>, drive: T) -> SVector<T, STATE> {
+    /// `dy` of the state after [`Slot::eval`]: `q̇`, `q̈`, motor power, load power (with
+    /// the power the losses `friction` dissipate, when any is on).
+    pub fn rates(
+        &self,
+        y: &SVector<T, STATE>,
+        inputs: &Inputs<T>,
+        drive: T,
+        friction: Option<&Friction<T>>,
+    ) -> SVector<T, STATE> {
         let mut dy = SVector::<T, STATE>::zeros();
         let n = self.map.dof.min(2);
         for k in 0..n {
@@ -355,16 +426,31 @@ impl<T: Real> Slot<T> {
         }
         let crank = self.body(CRANK) as usize;
         let w1 = self.ws.body.get(crank).map_or(T::zero(), |b| b.omega);
-        dy[W_MOTOR] = self
+        let mut on_crank = self
             .ws
             .applied_moment
             .get(crank)
             .copied()
-            .unwrap_or(T::zero())
-            * w1;
+            .unwrap_or(T::zero());
+        let mut loss = T::zero();
+        if let Some(friction) = friction {
+            // The crank's applied moment holds its joints' friction as well: the
+            // motor's alone is its power.
+            self.losses(friction, |body, tau, w| {
+                if body as usize == crank {
+                    on_crank -= tau;
+                }
+                loss -= tau * w;
+            });
+        }
+        dy[W_MOTOR] = on_crank * w1;
         if let Some(b) = self.shaft_body() {
             let ws = self.ws.body.get(b as usize).map_or(T::zero(), |b| b.omega);
             dy[W_LOAD] = inputs.load * drive * ws;
+        }
+        if friction.is_some() {
+            // Each loss visits its two bodies: half the sum is its power.
+            dy[W_LOAD] += loss * T::c(0.5);
         }
         dy
     }
@@ -375,7 +461,7 @@ impl<T: Real> Slot<T> {
         let mut out = [LinkState::default(); 9];
         for (p, o) in out.iter_mut().enumerate().skip(1) {
             let b = self.body(p);
-            let off = self.map.offset.get(p).copied().unwrap_or(T::zero());
+            let off = self.map.offset(p);
             if b == 0 {
                 // A locked lever: at rest about H.
                 *o = LinkState {
@@ -401,7 +487,7 @@ impl<T: Real> Slot<T> {
     /// from its model body's evaluated frame: a sine and cosine are computed only for a
     /// link with an angle offset (a locked lever, lever 8 in A68).
     pub fn frame(&self, p: usize) -> Vec2<T> {
-        let off = self.map.offset.get(p).copied().unwrap_or(T::zero());
+        let off = self.map.offset(p);
         let b = self.body(p);
         if b == 0 {
             return Vec2::new(off.cos(), off.sin());
@@ -446,7 +532,8 @@ impl<T: Real> Slot<T> {
     pub fn clutch_torques(&self, params: &CccParams<T>, links: &[LinkState<T>; 9]) -> [T; 2] {
         let d = params.drive.sign::<T>();
         let mut c = [T::zero(); 2];
-        for ((ck, (rod, lever)), clutch) in c.iter_mut().zip(BRANCHES).zip(self.mode.clutches()) {
+        let branches = c.iter_mut().zip(BRANCHES).zip(self.mode.clutches());
+        for (k, ((ck, (rod, lever)), clutch)) in branches.enumerate() {
             if clutch == Clutch::Free {
                 continue;
             }
@@ -456,7 +543,13 @@ impl<T: Real> Slot<T> {
             let tip = u * len;
             let cog = u * (len * T::c(0.5));
             let weight = params.gravity * params.link(lever).mass;
-            let m = cross(&tip, &self.rod_force_on_lever(rod, lever)) + cross(&cog, &weight);
+            let mut m = cross(&tip, &self.rod_force_on_lever(rod, lever)) + cross(&cog, &weight);
+            if let Some((cv, mu)) = pin_friction(&params.friction, k) {
+                // The friction at the lever's pin (G, I) acts on it beside the rod's
+                // force: the torque on the lever, its speed relative to the rod's.
+                let rod_w = links.get(rod).map_or(T::zero(), |r| r.omega);
+                m -= params.friction.joint_torque(cv, mu, s.omega - rod_w);
+            }
             *ck = d * (m - params.lever_inertia_about_h(lever) * s.alpha);
         }
         c
@@ -572,6 +665,30 @@ pub const JOINTS: [(u8, u8); 11] = [
     (8, 0),
 ];
 
+/// The index in [`FRICTION_JOINTS`] of each lever's pin (G of lever 6, I of lever 8:
+/// `(lever, rod)`, in `BRANCHES` order).
+const PIN_JOINTS: [usize; 2] = [7, 8];
+const _: () = {
+    let [(r5, l6), (r7, l8)] = BRANCHES;
+    let [g, i] = PIN_JOINTS;
+    assert!(
+        FRICTION_JOINTS[g].0 as usize == l6 && FRICTION_JOINTS[g].1 as usize == r5,
+        "G is lever 6 on rod 5"
+    );
+    assert!(
+        FRICTION_JOINTS[i].0 as usize == l8 && FRICTION_JOINTS[i].1 as usize == r7,
+        "I is lever 8 on rod 7"
+    );
+};
+
+/// The viscous and dry coefficients at branch `k`'s lever pin, if it has any friction.
+fn pin_friction<T: Real>(f: &Friction<T>, k: usize) -> Option<(T, T)> {
+    let j = PIN_JOINTS.get(k).copied().unwrap_or(0);
+    let c = f.viscous.get(j).copied().unwrap_or(T::zero());
+    let mu = f.coulomb.get(j).copied().unwrap_or(T::zero());
+    (c != T::zero() || mu != T::zero()).then_some((c, mu))
+}
+
 /// Names of [`JOINTS`], for CSV headers.
 pub const JOINT_NAMES: [&str; 11] = ["A", "B", "C", "E", "F", "D5", "D7", "G", "I", "H6", "H8"];
 
@@ -580,6 +697,7 @@ pub(crate) struct Equations<'a, T: Real> {
     pub slot: &'a mut Slot<T>,
     pub inputs: &'a Inputs<T>,
     pub drive: T,
+    pub friction: Option<&'a Friction<T>>,
 }
 
 impl<T: Real> OdeSystem<T, STATE> for Equations<'_, T> {
@@ -590,8 +708,9 @@ impl<T: Real> OdeSystem<T, STATE> for Equations<'_, T> {
         y: &SVector<T, STATE>,
         dy: &mut SVector<T, STATE>,
     ) -> Result<(), StepError> {
-        self.slot.eval(t, y, self.inputs, self.drive)?;
-        *dy = self.slot.rates(y, self.inputs, self.drive);
+        self.slot
+            .eval(t, y, self.inputs, self.drive, self.friction)?;
+        *dy = self.slot.rates(y, self.inputs, self.drive, self.friction);
         Ok(())
     }
 }

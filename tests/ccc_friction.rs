@@ -1,0 +1,392 @@
+//! The losses of a real machine (SPEC 5: joint friction, the overrunning clutches'
+//! drag) in the converter's twin, against oracles independent of its code: the
+//! quasi-static speed of a crank held back by viscous friction (`ω∞ = T/c`), the root of
+//! the regularized dry friction law and its stated distance from the exact one, the
+//! power dissipated computed from finite differences of the joint angles, and the
+//! energy audit closing on S2 with every loss on.
+
+use structomat::ccc::{
+    CccParams, Friction, Inputs, Mode, MotorInput, Twin, TwinSettings, FRICTION_JOINTS,
+    FRICTION_JOINT_NAMES,
+};
+use structomat::motor::Motor;
+use structomat::scalar::Vec2;
+use structomat::ModelError;
+
+/// Index of joint `name` in [`FRICTION_JOINTS`].
+fn joint(name: &str) -> usize {
+    FRICTION_JOINT_NAMES
+        .iter()
+        .position(|n| *n == name)
+        .expect("a joint of the converter")
+}
+
+/// The converter without gravity (so a crank driven by `T` against friction has no
+/// other load) and the free mode's settings (no diode: no load, no events).
+fn weightless_free(h: f64) -> (CccParams<f64>, TwinSettings<f64>) {
+    let mut p = CccParams::<f64>::reference();
+    p.gravity = Vec2::new(0.0, 0.0);
+    let mut s = TwinSettings::reference(h);
+    s.clutch = false;
+    (p, s)
+}
+
+fn torque(t: f64) -> Inputs<f64> {
+    Inputs {
+        motor: MotorInput::Torque(t),
+        load: 0.0,
+        measured: None,
+    }
+}
+
+fn run_to(twin: &mut Twin<f64>, inputs: &Inputs<f64>, t_end: f64) {
+    let steps = (t_end / twin.h()).round() as u64;
+    for _ in 0..steps {
+        twin.step(inputs).expect("a step of the damped converter");
+    }
+}
+
+/// Viscous friction `c` at A and F (the joints whose relative speeds are the free mode's
+/// coordinates' rates q̇1, q̇2), no gravity, a constant torque `T` on the crank: the
+/// generalized forces are `(T - c q̇1, -c q̇2)`, so the motion settles at the analytic
+/// `q̇1 = T/c`, `q̇2 = 0`, up to the inertial terms `M q̈ + ½ q̇ᵀ M' q̇`: with `T` = 1 N·m
+/// and `c` = 20 N·m·s/rad the crank creeps at 0.05 rad/s, turns 0.025 rad in 0.5 s,
+/// and those terms are of order ½|M'| ω² ≈ 1e-3 N·m, 1e-3 of `T` (the tolerance: 5e-3).
+/// The transient decays at `c/J` ≥ 40 /s: e⁻²⁰ by then.
+#[test]
+fn viscous_crank_reaches_the_analytic_speed() {
+    let (mut p, s) = weightless_free(1e-4);
+    let c = 20.0;
+    p.friction.viscous[joint("A")] = c;
+    p.friction.viscous[joint("F")] = c;
+    let t = 1.0;
+    let inputs = torque(t);
+    let mut twin = Twin::new(p, s, inputs).expect("the converter sets up");
+    run_to(&mut twin, &inputs, 0.5);
+    let (w1, w2) = (twin.link(1).omega, twin.link(4).omega);
+    assert!(
+        ((w1 - t / c) / (t / c)).abs() < 5e-3,
+        "crank {w1} rad/s against T/c = {}",
+        t / c
+    );
+    assert!(w2.abs() < 5e-3 * t / c, "swing link {w2} rad/s");
+    // The motor's work is the friction's: (T/c)·T per second at the steady speed.
+    let a = twin.audit();
+    assert!(a.residual().abs() <= 1e-9 * a.motor_work, "{a:?}");
+}
+
+/// The regularized dry friction `μ w/√(w² + ε²)` at A, viscous `c` at A and F, no
+/// gravity, a constant torque `T` on the crank. Sliding (`T > μ`): the crank settles
+/// at the root of `T = c w + μ w/√(w² + ε²)` (solved here by bisection), which differs
+/// from the exact Coulomb law's `(T - μ)/c` by about `μ ε²/(2 w² c)`, the
+/// regularization's error as `Friction` states it. Sticking (`T < μ`, no viscous
+/// friction at A): the crank creeps at `ε T/√(μ² - T²)` where a real dry joint holds.
+#[test]
+fn regularized_dry_friction_slides_and_creeps_as_stated() {
+    let (c, mu, eps) = (20.0, 2.0, 0.01);
+    // Sliding.
+    let (mut p, s) = weightless_free(1e-4);
+    p.friction.viscous[joint("A")] = c;
+    p.friction.viscous[joint("F")] = c;
+    p.friction.coulomb[joint("A")] = mu;
+    p.friction.coulomb_eps = eps;
+    let t = 3.0;
+    let law = |w: f64| c * w + mu * w / (w * w + eps * eps).sqrt() - t;
+    let (mut lo, mut hi) = (0.0, t / c);
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        if law(mid) > 0.0 {
+            hi = mid;
+        } else {
+            lo = mid;
+        }
+    }
+    let root = 0.5 * (lo + hi);
+    let inputs = torque(t);
+    let mut twin = Twin::new(p, s, inputs).expect("the converter sets up");
+    run_to(&mut twin, &inputs, 0.5);
+    let w = twin.link(1).omega;
+    assert!(
+        ((w - root) / root).abs() < 5e-3,
+        "crank {w}, law's root {root}"
+    );
+    let exact = (t - mu) / c;
+    let stated = mu * eps * eps / (2.0 * root * root * c);
+    // The regularized law brakes less than the exact one: the crank is faster.
+    assert!(
+        ((root - exact) - stated).abs() < 0.1 * stated,
+        "regularization error {} against the stated {stated}",
+        root - exact
+    );
+    // Sticking: T below μ, the swing link held by viscous friction at F.
+    let (mut p, s) = weightless_free(1e-4);
+    let eps = 0.05;
+    p.friction.viscous[joint("F")] = c;
+    p.friction.coulomb[joint("A")] = mu;
+    p.friction.coulomb_eps = eps;
+    let t = 1.0;
+    let inputs = torque(t);
+    let mut twin = Twin::new(p, s, inputs).expect("the converter sets up");
+    run_to(&mut twin, &inputs, 0.5);
+    let creep = eps * t / (mu * mu - t * t).sqrt();
+    let w = twin.link(1).omega;
+    assert!(
+        ((w - creep) / creep).abs() < 2e-2,
+        "crank {w}, creep {creep}"
+    );
+}
+
+/// The unwrapped angles of the links, rad (index 0: the ground, 0).
+fn angles(twin: &Twin<f64>) -> [f64; 9] {
+    let mut a = [0.0; 9];
+    for (p, x) in a.iter_mut().enumerate().skip(1) {
+        *x = twin.link(p).theta;
+    }
+    a
+}
+
+/// The power the joint friction dissipates, from the twin's own friction work (the
+/// audit's `load_work` with no load), against the same power computed from the joint
+/// angles alone: each joint's relative speed by 4th-order central differences of its
+/// relative angle, `Σ c w² + μ w²/√(w² + ε²)` integrated by Simpson's rule. The free
+/// mode under the S1 motor (12 N·m) for 0.2 s, friction at every joint.
+#[test]
+fn dissipated_work_is_the_joints_friction_from_finite_differences() {
+    let h = 1e-4;
+    let (mut p, s) = weightless_free(h);
+    p.gravity = CccParams::<f64>::reference().gravity;
+    for (k, (c, mu)) in p
+        .friction
+        .viscous
+        .iter_mut()
+        .zip(p.friction.coulomb.iter_mut())
+        .enumerate()
+    {
+        *c = 0.01 * (1 + k) as f64;
+        *mu = 0.02 * (9 - k) as f64;
+    }
+    p.friction.coulomb_eps = 0.05;
+    let f = p.friction;
+    let inputs = Inputs {
+        motor: MotorInput::Law(Motor::Constant(12.0)),
+        load: 0.0,
+        measured: None,
+    };
+    let mut twin = Twin::new(p, s, inputs).expect("the converter sets up");
+    let n = 2000;
+    let mut theta = vec![angles(&twin)];
+    for _ in 0..n {
+        twin.step(&inputs).expect("a step of the free converter");
+        theta.push(angles(&twin));
+    }
+    let power = |k: usize| -> f64 {
+        // Relative angle of each joint at step k, and its central difference.
+        let rel = |m: usize, (i, j): (u8, u8)| theta[m][i as usize] - theta[m][j as usize];
+        FRICTION_JOINTS
+            .iter()
+            .enumerate()
+            .map(|(jn, ij)| {
+                let w = (rel(k - 2, *ij) - 8.0 * rel(k - 1, *ij) + 8.0 * rel(k + 1, *ij)
+                    - rel(k + 2, *ij))
+                    / (12.0 * h);
+                let eps = f.coulomb_eps;
+                f.viscous[jn] * w * w + f.coulomb[jn] * w * w / (w * w + eps * eps).sqrt()
+            })
+            .sum()
+    };
+    // Simpson over steps 100..=1900 (an even number of intervals, clear of the ends).
+    let (a, b) = (100, 1900);
+    let mut integral = power(a) + power(b);
+    for k in (a + 1)..b {
+        integral += if (k - a) % 2 == 1 { 4.0 } else { 2.0 } * power(k);
+    }
+    integral *= h / 3.0;
+    // The twin's friction work over the same stretch: rerun to step a, then to b.
+    let work_at = |steps: usize| {
+        let mut t = Twin::new(p, s, inputs).expect("the converter sets up");
+        for _ in 0..steps {
+            t.step(&inputs).expect("a step");
+        }
+        t.audit().load_work
+    };
+    let twin_work = work_at(b) - work_at(a);
+    assert!(integral > 1.0, "a sizeable dissipation: {integral} J");
+    assert!(
+        ((twin_work - integral) / integral).abs() < 1e-6,
+        "friction work {twin_work} J, from the angles {integral} J"
+    );
+    let a = twin.audit();
+    assert!(a.residual().abs() <= 1e-6 * a.motor_work, "{a:?}");
+}
+
+/// S2's inputs: 12 N·m on the crank, T_r = 800 N·m.
+const S2: Inputs<f64> = Inputs {
+    motor: MotorInput::Law(Motor::Constant(12.0)),
+    load: 800.0,
+    measured: None,
+};
+
+/// S2 (12 N·m, T_r = 800 N·m, 1 s at h = 1e-4 s) with every loss on (every joint 0.02
+/// N·m·s/rad viscous and 0.05 N·m dry, the clutches' drag 0.05 N·m·s/rad): the diode
+/// still works (events, the shaft turning), and the energy audit, whose kinetic and
+/// potential energies come from the physical state, closes to 1e-6 of the motor's work
+/// with the losses counted; they are positive, and the work against the load is T_r
+/// times the shaft's turn.
+#[test]
+fn s2_with_friction_closes_its_energy_audit() {
+    // The oracle of the load's work, T_r times the shaft's turn, on SPEC's ideal
+    // machine (whose audit has no other loss).
+    let s2 = |p: CccParams<f64>, inputs: &Inputs<f64>| {
+        let mut twin = Twin::new(p, TwinSettings::reference(1e-4), *inputs).expect("S2");
+        run_to(&mut twin, inputs, 1.0);
+        twin
+    };
+    let ideal = s2(CccParams::reference(), &S2);
+    let load = 800.0 * ideal.shaft_angle().abs();
+    println!("ideal S2: {:?}, T_r x shaft turn {load}", ideal.audit());
+    assert!((ideal.audit().load_work - load).abs() <= 1e-6 * load);
+    let mut p = CccParams::<f64>::reference();
+    p.friction.viscous = [0.02; 9];
+    p.friction.coulomb = [0.05; 9];
+    p.friction.clutch_drag = 0.05;
+    let inputs = S2;
+    let s = TwinSettings::reference(1e-4);
+    let mut twin = Twin::new(p, s, inputs).expect("the converter sets up");
+    let mut events = 0;
+    let mut modes = std::collections::BTreeSet::new();
+    let mut worst: f64 = 0.0;
+    for _ in 0..10_000 {
+        twin.step(&inputs).expect("a step of S2 with friction");
+        events += twin.events().len();
+        modes.insert(twin.mode().name());
+        let a = twin.audit();
+        worst = worst.max(a.residual().abs() / a.motor_work.abs().max(1.0));
+    }
+    let a = twin.audit();
+    assert!(worst <= 1e-6, "audit residual {worst} of the motor work");
+    assert!(events >= 10, "{events} events");
+    assert!(modes.contains(Mode::A8.name()) || modes.contains(Mode::A68.name()));
+    let load = 800.0 * twin.shaft_angle().abs();
+    let losses = a.load_work - load;
+    assert!(losses > 0.0, "losses {losses} J");
+    println!("{a:?}");
+    println!(
+        "S2 with friction: {events} events, motor work {:.4} J, load {load:.4} J, losses {losses:.4} J, residual {:.3e} J, modes {modes:?}",
+        a.motor_work,
+        a.residual()
+    );
+}
+
+/// Bad coefficients are refused by the parameters' validation, named by their run-file
+/// key; all zero is no loss at all.
+#[test]
+fn bad_friction_is_refused_by_name() {
+    let mut f = Friction::<f64>::none();
+    assert!(!f.active());
+    assert_eq!(f.validate(), Ok(()));
+    f.viscous[joint("G")] = -1.0;
+    assert_eq!(
+        f.validate(),
+        Err(ModelError::Negative("converter.friction.viscous.G"))
+    );
+    f.viscous[joint("G")] = 0.0;
+    f.coulomb[joint("D7")] = f64::NAN;
+    assert_eq!(
+        f.validate(),
+        Err(ModelError::NonFinite("converter.friction.coulomb.D7"))
+    );
+    f.coulomb[joint("D7")] = 0.0;
+    f.clutch_drag = -0.1;
+    assert_eq!(
+        f.validate(),
+        Err(ModelError::Negative("converter.friction.clutch_drag"))
+    );
+    f.clutch_drag = 0.0;
+    f.coulomb_eps = 0.0;
+    assert_eq!(
+        f.validate(),
+        Err(ModelError::NotPositive("converter.friction.coulomb_eps"))
+    );
+    let mut p = CccParams::<f64>::reference();
+    p.friction.viscous[joint("A")] = f64::INFINITY;
+    assert_eq!(
+        p.validate(),
+        Err(ModelError::NonFinite("converter.friction.viscous.A"))
+    );
+}
+
+/// The clutch drag alone on S2: over every step without an event, the work the twin
+/// counts beyond the load's (T_r times the shaft's turn) is the drag's,
+/// `∫ d·(ω_k − ω_s)² dt` over the overrunning levers, integrated here by the trapezoidal
+/// rule from the twin's link speeds at the steps' ends (its error ~h²/12·|f''/f|, 1e-6
+/// relative at these speeds; the tolerance 1e-4).
+#[test]
+fn clutch_drag_dissipates_its_slip_power() {
+    use structomat::ccc::Clutch;
+    let drag = 0.2;
+    let mut p = CccParams::<f64>::reference();
+    p.friction.clutch_drag = drag;
+    let mut twin = Twin::new(p, TwinSettings::reference(1e-4), S2).expect("S2");
+    let slip_power = |t: &Twin<f64>| -> f64 {
+        let ws = t.shaft_speed();
+        [6usize, 8]
+            .iter()
+            .zip(t.mode().clutches())
+            .filter(|(_, c)| *c == Clutch::Free)
+            .map(|(k, _)| drag * (t.link(*k).omega - ws).powi(2))
+            .sum()
+    };
+    let (mut counted, mut oracle) = (0.0, 0.0);
+    let mut steps = 0;
+    for _ in 0..8000 {
+        let (mode, p0, w0, s0) = (
+            twin.mode(),
+            slip_power(&twin),
+            twin.audit().load_work,
+            twin.shaft_angle(),
+        );
+        twin.step(&S2).expect("a step of S2 with drag");
+        if !twin.events().is_empty() || twin.mode() != mode {
+            continue;
+        }
+        counted += twin.audit().load_work - w0 + 800.0 * (twin.shaft_angle() - s0);
+        oracle += 0.5 * twin.h() * (p0 + slip_power(&twin));
+        steps += 1;
+    }
+    assert!(oracle > 0.1, "{oracle} J of drag over {steps} steps");
+    assert!(
+        ((counted - oracle) / oracle).abs() < 1e-4,
+        "drag work {counted} J, from the slip speeds {oracle} J"
+    );
+    let a = twin.audit();
+    assert!(a.residual().abs() <= 1e-6 * a.motor_work, "{a:?}");
+}
+
+/// The f32 twin (the firmware's) with every loss on runs S2's first second and keeps
+/// its audit within its own tolerance's reach: 1e-4 of the motor's work (f32 rounds at
+/// 6e-8; the f64 run's losses are matched to 1e-3).
+#[test]
+fn f32_twin_runs_s2_with_friction() {
+    let mut p = CccParams::<f32>::reference();
+    p.friction.viscous = [0.02; 9];
+    p.friction.coulomb = [0.05; 9];
+    p.friction.clutch_drag = 0.05;
+    let inputs = Inputs {
+        motor: MotorInput::Law(Motor::Constant(12.0f32)),
+        load: 800.0f32,
+        measured: None,
+    };
+    let mut twin = Twin::new(p, TwinSettings::reference(1e-4f32), inputs).expect("S2 in f32");
+    for _ in 0..10_000 {
+        twin.step(&inputs)
+            .expect("a step of S2 in f32 with friction");
+    }
+    let a = twin.audit();
+    assert!(a.residual().abs() <= 1e-4 * a.motor_work, "f32 audit {a:?}");
+    let losses = a.load_work - 800.0 * twin.shaft_angle().abs();
+    println!("f32 S2 with friction: {a:?}, losses {losses} J");
+    assert!(
+        (losses - 25.2549).abs() < 25.2549e-3 * 5.0,
+        "losses {losses} J"
+    );
+}
