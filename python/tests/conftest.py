@@ -59,8 +59,9 @@ def run_cli(host_sim, tmp_path, source, *args):
 
 def same_bits(a, b):
     """Two columns equal bit for bit (NaN at the same places), or equal lists of str."""
-    if isinstance(a, list) or isinstance(b, list):
-        return list(a) == list(b)
+    texts = [isinstance(x, str) for c in (a, b) if isinstance(c, list) for x in c]
+    if any(texts):
+        return isinstance(a, list) and isinstance(b, list) and list(a) == list(b)
     a = np.asarray(a, dtype=np.float64)
     b = np.asarray(b, dtype=np.float64)
     return a.shape == b.shape and np.array_equal(a.view(np.uint64), b.view(np.uint64))

@@ -139,11 +139,11 @@ def test_the_gil_is_released_during_a_run():
     t = threading.Thread(target=tick)
     t.start()
     t0 = time.monotonic()
-    r = structomat.run("ccc-s2", t_end=1.0)
+    r = structomat.run("ccc-s2", t_end=5.0)
     t1 = time.monotonic()
     stop.set()
     t.join()
     during = [x for x in ticks if t0 < x < t1]
     # The other thread kept running: a tick every ~5 ms of the run's wall time.
     assert r.summary["wall"] > 0.1
-    assert len(during) >= 0.5 * (t1 - t0) / 0.005 * 0.5
+    assert len(during) >= 0.25 * (t1 - t0) / 0.005
