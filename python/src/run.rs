@@ -10,8 +10,9 @@ use host_sim::run::{interrupt, simulate, Report};
 use host_sim::{RunError, RunOptions, ScenarioId, Summary};
 use numpy::PyArray1;
 use pyo3::prelude::*;
-use pyo3::types::{PyDict, PyList, PyTuple};
+use pyo3::types::{PyDict, PyList, PyString, PyTuple};
 use std::cell::RefCell;
+use std::collections::HashMap;
 use std::rc::Rc;
 use std::time::{Duration, Instant};
 
@@ -95,14 +96,16 @@ pub fn run<'py>(
         }
         Err(e) => return Err(run_error(e)),
     };
-    let [events, switches] = match &gathered.logs[..] {
-        [e, s] => [table_dict(py, e)?, table_dict(py, s)?],
-        _ => [PyDict::new(py), PyDict::new(py)],
+    let Gathered { state, logs } = gathered;
+    let mut logs = logs.into_iter();
+    let (events, switches) = match (logs.next(), logs.next()) {
+        (Some(e), Some(s)) => (table_dict(py, e)?, table_dict(py, s)?),
+        _ => (PyDict::new(py), PyDict::new(py)),
     };
     PyTuple::new(
         py,
         [
-            table_dict(py, &gathered.state)?.into_any(),
+            table_dict(py, state)?.into_any(),
             events.into_any(),
             switches.into_any(),
             summary.into_any(),
@@ -120,13 +123,24 @@ pub fn scenarios() -> Vec<(&'static str, &'static str)> {
         .collect()
 }
 
-/// A table as a dict of column name to a float64 array (a list of str for names).
-pub fn table_dict<'py>(py: Python<'py>, t: &Table) -> PyResult<Bound<'py, PyDict>> {
+/// A table as a dict of column name to a float64 array (a list of str for names),
+/// its number columns moved into numpy without a copy, each distinct name made a
+/// Python str once (a mode's name repeats on every row).
+pub fn table_dict<'py>(py: Python<'py>, t: Table) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
-    for (k, name) in t.names.iter().enumerate() {
-        match t.columns.get(k) {
-            Some(Column::Num(v)) => d.set_item(name, PyArray1::from_slice(py, v))?,
-            Some(Column::Text(v)) => d.set_item(name, PyList::new(py, v)?)?,
+    let mut columns = t.columns.into_iter();
+    for name in &t.names {
+        match columns.next() {
+            Some(Column::Num(v)) => d.set_item(name, PyArray1::from_vec(py, v))?,
+            Some(Column::Text(v)) => {
+                let mut made: HashMap<String, Bound<'py, PyString>> = HashMap::new();
+                let list = PyList::empty(py);
+                for s in v {
+                    let p = made.entry(s).or_insert_with_key(|s| PyString::new(py, s));
+                    list.append(&*p)?;
+                }
+                d.set_item(name, list)?
+            }
             None => d.set_item(name, PyArray1::<f64>::zeros(py, 0, false))?,
         }
     }
