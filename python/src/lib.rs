@@ -13,11 +13,12 @@
 //!    options.
 //! 2. [`table`]: the observer that gathers a run's tables (the state table and the
 //!    converter's logs) column by column.
-//! 3. [`run`] and [`twin`]: the module's functions and classes.
+//! 3. [`run`], [`twin`] and [`sweep`]: the module's functions and classes.
 
 pub mod errors;
 pub mod options;
 pub mod run;
+pub mod sweep;
 pub mod table;
 pub mod twin;
 
@@ -31,6 +32,9 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("TwinError", py.get_type::<errors::TwinError>())?;
     m.add_function(wrap_pyfunction!(run::run, m)?)?;
     m.add_function(wrap_pyfunction!(run::scenarios, m)?)?;
+    m.add_function(wrap_pyfunction!(sweep::sweep_plan, m)?)?;
+    m.add_function(wrap_pyfunction!(sweep::sweep_run, m)?)?;
+    m.add_function(wrap_pyfunction!(sweep::sweep_write, m)?)?;
     m.add_class::<twin::Twin>()?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())

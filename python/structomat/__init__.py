@@ -16,7 +16,7 @@ from typing import Any, Dict, List, Optional, Union
 from . import _core
 from ._core import Error, Twin, TwinError, __version__
 
-__all__ = ["Error", "Result", "Twin", "TwinError", "run", "scenarios", "__version__"]
+__all__ = ["Error", "Result", "Twin", "TwinError", "run", "scenarios", "sweep", "__version__"]
 
 
 class Result:
@@ -74,3 +74,47 @@ def run(source: Union[str, "os.PathLike[str]"], **overrides: Any) -> Result:
 def scenarios() -> List[tuple]:
     """The built-in scenarios, ``(name, description)``, as ``host-sim list`` lists them."""
     return _core.scenarios()
+
+
+def _sweep_batch(path: str, which: List[int]) -> list:
+    """A Dask task: variants ``which`` of the sweep file ``path``, run in order (the GIL
+    released), their outcomes."""
+    return _core.sweep_run(path, list(which))
+
+
+def sweep(path: Union[str, "os.PathLike[str]"], out_dir: Union[str, "os.PathLike[str]"],
+          client: Any = None, batch: Optional[int] = None) -> Dict[str, Any]:
+    """Runs the sweep file ``path``'s variants and writes ``sweep.csv`` and the heat-maps
+    into ``out_dir``: the same files as ``host-sim sweep``, byte for byte, whatever runs
+    them.
+
+    ``client``: a ``dask.distributed.Client``; its workers run the variants as tasks of
+    ``batch`` variants each (default: about four tasks a worker; a converter variant
+    takes tens of milliseconds, so a task is well over Dask's ~10 ms per task), the GIL
+    released in each; the rows are gathered in grid order. The file must be readable at
+    the same path on the workers. ``None``: the variants run here, in this process, one
+    batch after another. A variant whose run fails is a row saying how it ended; a
+    worker lost mid-sweep has its tasks run again elsewhere (a task is pure: the same
+    rows, once each). A bad sweep file or variant raises :class:`Error` before anything
+    runs. Returns ``{"variants", "table", "heatmaps", "tasks"}``.
+    """
+    path = os.path.abspath(os.fspath(path))
+    out_dir = os.fspath(out_dir)
+    n = _core.sweep_plan(path)
+    if batch is None:
+        workers = 1
+        if client is not None:
+            workers = max(1, len(client.scheduler_info().get("workers", {})))
+        batch = max(1, -(-n // (4 * workers)))
+    if batch < 1:
+        raise ValueError(f"batch: {batch} is not a positive number of variants")
+    chunks = [list(range(k, min(n, k + batch))) for k in range(0, n, batch)]
+    if client is None:
+        parts = [_sweep_batch(path, c) for c in chunks]
+    else:
+        # pure=False: each chunk is its own task even where two chunks look alike.
+        futures = [client.submit(_sweep_batch, path, c, pure=False) for c in chunks]
+        parts = client.gather(futures)
+    outcomes = [o for part in parts for o in part]
+    table, heatmaps = _core.sweep_write(path, out_dir, outcomes)
+    return {"variants": n, "table": table, "heatmaps": heatmaps, "tasks": len(chunks)}

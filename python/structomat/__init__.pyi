@@ -42,6 +42,13 @@ def run(
 
 def scenarios() -> List[Tuple[str, str]]: ...
 
+def sweep(
+    path: Union[str, "os.PathLike[str]"],
+    out_dir: Union[str, "os.PathLike[str]"],
+    client: Any = None,
+    batch: Optional[int] = None,
+) -> Dict[str, Any]: ...
+
 class Twin:
     def __init__(
         self,
