@@ -678,7 +678,9 @@ pub fn parse_sweep(
 
 /// The base run file's tree: a built-in scenario's embedded file, or a run file at a
 /// path relative to the sweep file's directory `dir`.
-fn load_base(base: &str, dir: &Path) -> Result<(Table, String), String> {
+/// The base of a sweep file in `dir`: a built-in scenario's embedded run file, or a run
+/// file's path relative to `dir`; its TOML tree and its name for messages.
+pub fn load_base(base: &str, dir: &Path) -> Result<(Table, String), String> {
     let (text, origin) = match ScenarioId::from_name(base) {
         Some(id) => (id.file_text().to_string(), id.name().to_string()),
         None => {
@@ -700,11 +702,77 @@ fn load_base(base: &str, dir: &Path) -> Result<(Table, String), String> {
 }
 
 /// A variant ready to run.
-struct Job {
+pub struct Job {
     /// The axis indices.
-    idx: Vec<usize>,
+    pub idx: Vec<usize>,
     /// Its run options (from its run file; quiet).
-    opts: RunOptions,
+    pub opts: RunOptions,
+}
+
+/// Runs variant `k` of `total`: as `host-sim batch` runs a line, its files into `keep`
+/// when given (named as the batch names them), else nothing written; a run not started
+/// because SIGINT or SIGTERM came first is its row "not run". The one run of a variant,
+/// on host-sim's thread pool or on a Dask worker (the Python package).
+pub fn run_job(job: &Job, k: usize, total: usize, keep: Option<&Path>) -> Outcome {
+    if interrupt::requested() {
+        return Outcome::from(&batch::Outcome::of(&job.opts, Err(RunError::NotRun)));
+    }
+    let o = match keep {
+        Some(out) => {
+            let src = &job.opts.scenario;
+            batch::run_one(&job.opts, &out.join(batch::file_name(k, total, src)))
+        }
+        None => batch::run_quiet(&job.opts),
+    };
+    Outcome::from(&o)
+}
+
+/// The ends a sweep's row can have, as its `end` column writes them.
+pub const ENDS: [&str; 6] = [
+    "completed",
+    "singularity",
+    "failed",
+    "error",
+    "interrupted",
+    "not run",
+];
+
+/// Writes a sweep's files into `out`: `sweep.csv` ([`write_table`]) and every heat-map
+/// as SVG and PNG, from the variants' outcomes in grid order; returns the table's path
+/// and the heat-maps' SVG paths. Errors: the file that could not be written, and why.
+pub fn write_outputs(
+    out: &Path,
+    sweep: &Sweep,
+    variants: &[Vec<usize>],
+    runs: &[Outcome],
+) -> Result<(PathBuf, Vec<PathBuf>), String> {
+    let table = out.join("sweep.csv");
+    let written = File::create(&table).and_then(|f| {
+        let mut w = BufWriter::new(f);
+        write_table(&mut w, sweep, variants, runs)?;
+        w.flush()
+    });
+    if let Err(e) = written {
+        return Err(format!("cannot write {}: {e}", table.display()));
+    }
+    let mut pictures = Vec::new();
+    for (n, spec) in sweep.heatmaps.iter().enumerate() {
+        let grids = heat_grids(sweep, spec, variants, runs);
+        let several = grids.len() > 1;
+        for (k, g) in grids.iter().enumerate() {
+            let mut stem = format!("heatmap{}-{}", n + 1, spec.metric.name());
+            if several {
+                stem.push_str(&format!("-{}", k + 1));
+            }
+            let figure = draw::heatmap(&heat_map(sweep, spec, g));
+            for ext in ["svg", "png"] {
+                let path = out.join(format!("{stem}.{ext}"));
+                figure.write(&path).map_err(|e| e.to_string())?;
+            }
+            pictures.push(out.join(format!("{stem}.svg")));
+        }
+    }
+    Ok((table, pictures))
 }
 
 /// Runs `host-sim sweep` with `opts`: checks the sweep file and every variant before
@@ -769,16 +837,7 @@ pub fn execute(opts: &SweepOptions, stdout: &mut dyn Write, stderr: &mut dyn Wri
         |k, job: &Job| {
             // SIGINT or SIGTERM: the runs under way finish as interrupted; the others do
             // not start.
-            if interrupt::requested() {
-                return Outcome::from(&batch::Outcome::of(&job.opts, Err(RunError::NotRun)));
-            }
-            let o = if opts.keep_runs {
-                let src = &job.opts.scenario;
-                batch::run_one(&job.opts, &out.join(batch::file_name(k, total, src)))
-            } else {
-                batch::run_quiet(&job.opts)
-            };
-            Outcome::from(&o)
+            run_job(job, k, total, opts.keep_runs.then_some(out.as_path()))
         },
         |p, _| {
             let line = progress_bar(p.done, p.total, start.elapsed());
@@ -796,36 +855,13 @@ pub fn execute(opts: &SweepOptions, stdout: &mut dyn Write, stderr: &mut dyn Wri
     );
     let wall = start.elapsed();
     let variants: Vec<Vec<usize>> = jobs.into_iter().map(|j| j.idx).collect();
-    let table = out.join("sweep.csv");
-    let written = File::create(&table).and_then(|f| {
-        let mut w = BufWriter::new(f);
-        write_table(&mut w, &sweep, &variants, &runs)?;
-        w.flush()
-    });
-    if let Err(e) = written {
-        let _ = writeln!(stderr, "host-sim: cannot write {}: {e}", table.display());
-        return EXIT_FAILURE;
-    }
-    let mut pictures = Vec::new();
-    for (n, spec) in sweep.heatmaps.iter().enumerate() {
-        let grids = heat_grids(&sweep, spec, &variants, &runs);
-        let several = grids.len() > 1;
-        for (k, g) in grids.iter().enumerate() {
-            let mut stem = format!("heatmap{}-{}", n + 1, spec.metric.name());
-            if several {
-                stem.push_str(&format!("-{}", k + 1));
-            }
-            let figure = draw::heatmap(&heat_map(&sweep, spec, g));
-            for ext in ["svg", "png"] {
-                let path = out.join(format!("{stem}.{ext}"));
-                if let Err(e) = figure.write(&path) {
-                    let _ = writeln!(stderr, "host-sim: {e}");
-                    return EXIT_FAILURE;
-                }
-            }
-            pictures.push(out.join(format!("{stem}.svg")));
+    let (table, pictures) = match write_outputs(out, &sweep, &variants, &runs) {
+        Ok(files) => files,
+        Err(e) => {
+            let _ = writeln!(stderr, "host-sim: {e}");
+            return EXIT_FAILURE;
         }
-    }
+    };
     let stopped = interrupt::requested();
     let failed: Vec<usize> = (0..runs.len())
         .filter(|&k| runs[k].exit != EXIT_OK && !(stopped && runs[k].exit == EXIT_INTERRUPTED))
@@ -865,7 +901,7 @@ pub fn execute(opts: &SweepOptions, stdout: &mut dyn Write, stderr: &mut dyn Wri
 
 /// Every variant's run options, from its run file; errors: every bad variant, named by
 /// its number and axis values, with the run file's message.
-fn prepare(sweep: &Sweep) -> Result<Vec<Job>, Vec<String>> {
+pub fn prepare(sweep: &Sweep) -> Result<Vec<Job>, Vec<String>> {
     let variants = sweep.variants().map_err(|e| vec![e.to_string()])?;
     let (mut jobs, mut bad) = (Vec::new(), Vec::new());
     for (k, (idx, tree)) in variants.into_iter().enumerate() {
@@ -928,25 +964,18 @@ fn report(
 ) -> io::Result<()> {
     let total = runs.len();
     // How they ended, in batch.csv's words; "0 completed" is said, other zeros not.
-    let ends = [
-        "completed",
-        "singularity",
-        "failed",
-        "error",
-        "interrupted",
-        "not run",
-    ]
-    .iter()
-    .filter_map(|&end| {
-        let n = runs.iter().filter(|o| o.end == end).count();
-        let what = match end {
-            "singularity" => "at a singularity of the mechanism",
-            other => other,
-        };
-        (n > 0 || end == "completed").then(|| format!("{n} {what}"))
-    })
-    .collect::<Vec<_>>()
-    .join(", ");
+    let ends = ENDS
+        .iter()
+        .filter_map(|&end| {
+            let n = runs.iter().filter(|o| o.end == end).count();
+            let what = match end {
+                "singularity" => "at a singularity of the mechanism",
+                other => other,
+            };
+            (n > 0 || end == "completed").then(|| format!("{n} {what}"))
+        })
+        .collect::<Vec<_>>()
+        .join(", ");
     let axes = sweep
         .axes
         .iter()

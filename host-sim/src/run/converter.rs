@@ -671,8 +671,8 @@ impl Driven {
 }
 
 /// The state row of `twin` into `cells` (see [`columns`]): cells past the mode's DOF
-/// are empty.
-fn row<T: Real>(twin: &Twin<T>, cells: &mut Vec<Cell<'static, T>>) {
+/// are empty. The one definition of a row: the CSV's and the Python twin's `state()`.
+pub fn row<T: Real>(twin: &Twin<T>, cells: &mut Vec<Cell<'static, T>>) {
     cells.clear();
     let mode = twin.mode();
     cells.extend([

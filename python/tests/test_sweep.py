@@ -1,0 +1,66 @@
+"""structomat.sweep against host-sim sweep: the same sweep.csv and heat-maps byte for
+byte, in-process and on a Dask LocalCluster of 1 and 2 worker processes."""
+
+import subprocess
+from pathlib import Path
+
+import pytest
+
+import structomat
+from conftest import ROOT
+
+SWEEP = ROOT / "host-sim" / "sweeps" / "mass-motor.toml"
+
+
+def files(d: Path):
+    return {p.name: p.read_bytes() for p in sorted(d.iterdir())}
+
+
+@pytest.fixture(scope="module")
+def reference(host_sim, tmp_path_factory):
+    out = tmp_path_factory.mktemp("host-sim-sweep")
+    p = subprocess.run([str(host_sim), "sweep", str(SWEEP), "--out-dir", str(out), "--quiet"],
+                       capture_output=True, text=True)
+    assert p.returncode == 0, p.stderr
+    got = files(out)
+    assert "sweep.csv" in got and len(got) == 5
+    return got
+
+
+def test_in_process_sweep_equals_host_sim(reference, tmp_path):
+    r = structomat.sweep(SWEEP, tmp_path / "out", batch=7)
+    assert r["variants"] == 30 and r["tasks"] == 5
+    assert files(tmp_path / "out") == reference
+
+
+@pytest.mark.parametrize("workers", [1, 2])
+def test_dask_sweep_equals_host_sim(reference, tmp_path, workers):
+    distributed = pytest.importorskip("distributed")
+    with distributed.LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                                  dashboard_address=None) as cluster, \
+            distributed.Client(cluster) as client:
+        r = structomat.sweep(SWEEP, tmp_path / "out", client=client)
+    assert r["tasks"] == 4 * workers if 30 >= 4 * workers else True
+    assert files(tmp_path / "out") == reference
+
+
+def test_a_failing_variant_is_a_row(host_sim, tmp_path):
+    # A step so long the twin's energy check fails: a row saying so, not a lost task.
+    f = tmp_path / "bad.toml"
+    f.write_text('base = "ccc-s2"\n[set]\n"run.t_end" = 0.2\n'
+                 '[[axis]]\nkey = "run.h"\nvalues = [1e-4, 0.05]\n')
+    ref = tmp_path / "ref"
+    p = subprocess.run([str(host_sim), "sweep", str(f), "--out-dir", str(ref), "--quiet"],
+                       capture_output=True, text=True)
+    structomat.sweep(f, tmp_path / "py")
+    assert files(tmp_path / "py") == files(ref)
+    rows = (ref / "sweep.csv").read_text().splitlines()
+    assert len(rows) == 3
+
+
+def test_a_bad_sweep_file_raises_host_sims_message(tmp_path):
+    f = tmp_path / "bad.toml"
+    f.write_text('base = "ccc-s2"\n[[axis]]\nkey = "converter.nope"\nvalues = [1.0]\n')
+    with pytest.raises(structomat.Error, match="converter"):
+        structomat.sweep(f, tmp_path / "out")
+    assert not (tmp_path / "out").exists()
