@@ -70,6 +70,11 @@ fn viscous_crank_reaches_the_analytic_speed() {
         t / c
     );
     assert!(w2.abs() < 5e-3 * t / c, "swing link {w2} rad/s");
+    println!(
+        "viscous crank: {w1} rad/s against T/c = {} ({:.2e} relative), swing {w2:.2e} rad/s",
+        t / c,
+        (w1 - t / c) / (t / c)
+    );
     // The motor's work is the friction's: (T/c)·T per second at the steady speed.
     let a = twin.audit();
     assert!(a.residual().abs() <= 1e-9 * a.motor_work, "{a:?}");
@@ -110,6 +115,10 @@ fn regularized_dry_friction_slides_and_creeps_as_stated() {
         ((w - root) / root).abs() < 5e-3,
         "crank {w}, law's root {root}"
     );
+    println!(
+        "dry sliding: crank {w}, law's root {root}, exact Coulomb {}",
+        (t - mu) / c
+    );
     let exact = (t - mu) / c;
     let stated = mu * eps * eps / (2.0 * root * root * c);
     // The regularized law brakes less than the exact one: the crank is faster.
@@ -134,6 +143,7 @@ fn regularized_dry_friction_slides_and_creeps_as_stated() {
         ((w - creep) / creep).abs() < 2e-2,
         "crank {w}, creep {creep}"
     );
+    println!("dry sticking: crank creeps at {w}, stated {creep}");
 }
 
 /// The unwrapped angles of the links, rad (index 0: the ground, 0).
@@ -214,6 +224,10 @@ fn dissipated_work_is_the_joints_friction_from_finite_differences() {
     assert!(
         ((twin_work - integral) / integral).abs() < 1e-6,
         "friction work {twin_work} J, from the angles {integral} J"
+    );
+    println!(
+        "joint friction work {twin_work} J, from the angles {integral} J ({:.2e})",
+        (twin_work - integral) / integral
     );
     let a = twin.audit();
     assert!(a.residual().abs() <= 1e-6 * a.motor_work, "{a:?}");
@@ -354,6 +368,10 @@ fn clutch_drag_dissipates_its_slip_power() {
         steps += 1;
     }
     assert!(oracle > 0.1, "{oracle} J of drag over {steps} steps");
+    println!(
+        "drag work {counted} J, from the slip speeds {oracle} J ({:.2e}) over {steps} steps",
+        (counted - oracle) / oracle
+    );
     assert!(
         ((counted - oracle) / oracle).abs() < 1e-4,
         "drag work {counted} J, from the slip speeds {oracle} J"
