@@ -651,19 +651,18 @@ impl<T: Real> Slot<T> {
 /// The physical joints, as `(i, j)`: the reaction reported is the force on link `i`
 /// from link `j` (0: the ground or the shaft). A, B, C, E, F, D (rod 5), D (rod 7), G,
 /// I, H (lever 6), H (lever 8).
-pub const JOINTS: [(u8, u8); 11] = [
-    (1, 0),
-    (2, 1),
-    (3, 2),
-    (3, 4),
-    (4, 0),
-    (5, 3),
-    (7, 3),
-    (6, 5),
-    (8, 7),
-    (6, 0),
-    (8, 0),
-];
+pub const JOINTS: [(u8, u8); 11] = {
+    // The revolute joints with friction (A … I), then the two clutches at H.
+    let mut all = [(0, 0); 11];
+    let mut k = 0;
+    while k < FRICTION_JOINTS.len() {
+        all[k] = FRICTION_JOINTS[k];
+        k += 1;
+    }
+    all[9] = (6, 0);
+    all[10] = (8, 0);
+    all
+};
 
 /// The index in [`FRICTION_JOINTS`] of each lever's pin (G of lever 6, I of lever 8:
 /// `(lever, rod)`, in `BRANCHES` order).
