@@ -63,14 +63,14 @@ pub fn run_options(source: &str, overrides: Option<&Bound<'_, PyDict>>) -> PyRes
             }
             let text = |v: &Bound<'_, PyAny>| number(&key, v).map(Some);
             match key.as_str() {
-                "h" | "step" => args.h = text(&value)?,
-                "t_end" => args.t_end = text(&value)?,
+                "h" | "step" => args.time.h = text(&value)?,
+                "t_end" => args.time.t_end = text(&value)?,
                 "every" => args.every = text(&value)?,
-                "motor" => args.motor = text(&value)?,
-                "load" => args.load = text(&value)?,
+                "motor" => args.converter.motor = text(&value)?,
+                "load" => args.converter.load = text(&value)?,
                 "f32" => args.f32 = flag(&key, &value)?,
                 "f64" => args.f64 = flag(&key, &value)?,
-                "ccw" => args.ccw = flag(&key, &value)?,
+                "ccw" => args.converter.ccw = flag(&key, &value)?,
                 _ => {
                     return Err(PyTypeError::new_err(format!(
                         "unexpected keyword argument '{key}' (the keywords of a run: {})",

@@ -32,17 +32,9 @@ pub struct RunArgs {
     /// the summary to stderr
     #[arg(long, value_name = "FILE|-")]
     pub out: Option<String>,
-    /// Step size (default: the scenario's own); also spelled --step (-h is help)
-    #[arg(
-        long,
-        visible_alias = "step",
-        value_name = "SECONDS",
-        allow_negative_numbers = true
-    )]
-    pub h: Option<String>,
-    /// Simulated time (default: the scenario's own); runs ceil(t_end / h) fixed steps
-    #[arg(long, value_name = "SECONDS", allow_negative_numbers = true)]
-    pub t_end: Option<String>,
+    /// The step and the horizon.
+    #[command(flatten)]
+    pub time: TimeArgs,
     /// Write every N-th step (default: the file's, else 1); the row at t = 0 is always
     /// written
     #[arg(long, value_name = "N", allow_negative_numbers = true)]
@@ -72,7 +64,34 @@ pub struct RunArgs {
     /// 1); frames are taken every 1/(fps·X) s of simulated time, at most 5000 of them
     #[arg(long, value_name = "X", requires = "animate", help_heading = PICTURES)]
     pub slow: Option<String>,
-    /// Constant motor torque on the crank, CCW positive (default 12)
+    /// The converter's motor, load and direction.
+    #[command(flatten)]
+    pub converter: ConverterArgs,
+}
+
+/// The step and the horizon, as `run` and `fmu` take them.
+#[derive(Args, Clone, Debug, Default, PartialEq)]
+pub struct TimeArgs {
+    /// Step size (default: the scenario's own; the FMU's parameter h); also spelled
+    /// --step (-h is help)
+    #[arg(
+        long,
+        visible_alias = "step",
+        value_name = "SECONDS",
+        allow_negative_numbers = true
+    )]
+    pub h: Option<String>,
+    /// Simulated time (default: the scenario's own; the FMU's default experiment's stop
+    /// time); runs ceil(t_end / h) fixed steps
+    #[arg(long, value_name = "SECONDS", allow_negative_numbers = true)]
+    pub t_end: Option<String>,
+}
+
+/// The converter scenarios' options, as `run` and `fmu` take them (for the FMU, the
+/// start values of its inputs and of its parameter ccw).
+#[derive(Args, Clone, Debug, Default, PartialEq)]
+pub struct ConverterArgs {
+    /// Constant motor torque on the crank, CCW positive (default: the scenario's, 12)
     #[arg(long, value_name = "N·M", allow_negative_numbers = true, help_heading = CONVERTER)]
     pub motor: Option<String>,
     /// ccc-s2: load torque T_r >= 0 on the shaft (default 800)
@@ -93,11 +112,12 @@ impl RunArgs {
         let out = self.out.as_deref().map_or(Ok(Output::Stdout), parse_out)?;
         let seconds =
             |name, v: &Option<String>| v.as_deref().map(|v| parse_seconds(name, v)).transpose();
-        let h = seconds("--h", &self.h)?;
-        let t_end = seconds("--t-end", &self.t_end)?;
+        let h = seconds("--h", &self.time.h)?;
+        let t_end = seconds("--t-end", &self.time.t_end)?;
         let every = self.every.as_deref().map(parse_every).transpose()?;
-        let load = self.load.as_deref().map(parse_load).transpose()?;
-        let motor = self
+        let converter = &self.converter;
+        let load = converter.load.as_deref().map(parse_load).transpose()?;
+        let motor = converter
             .motor
             .as_deref()
             .map(|v| parse_torque("--motor", v))
@@ -114,7 +134,7 @@ impl RunArgs {
         }
         let fps = self.fps.as_deref().map(parse_fps).transpose()?;
         let slow = self.slow.as_deref().map(parse_slow).transpose()?;
-        check_converter_options(&scenario, self.ccw, load.is_some(), motor.is_some())?;
+        check_converter_options(&scenario, converter.ccw, load.is_some(), motor.is_some())?;
         // The run file's own output settings, unless the arguments give them.
         let file = scenario.run_file().ok();
         let every = every.unwrap_or_else(|| file.as_ref().map_or(1, |f| f.run.every));
@@ -132,7 +152,7 @@ impl RunArgs {
             every,
             f32,
             quiet: self.quiet,
-            ccw: self.ccw,
+            ccw: converter.ccw,
             load,
             motor,
             plot,
@@ -155,28 +175,13 @@ pub struct FmuArgs {
     /// FILE
     #[arg(long, value_name = "FILE")]
     pub out: String,
-    /// The twin's fixed step h, the start value of the FMU's parameter h (default: the
-    /// scenario's); also spelled --step
-    #[arg(
-        long,
-        visible_alias = "step",
-        value_name = "SECONDS",
-        allow_negative_numbers = true
-    )]
-    pub h: Option<String>,
-    /// The default experiment's stop time (default: the scenario's t_end)
-    #[arg(long, value_name = "SECONDS", allow_negative_numbers = true)]
-    pub t_end: Option<String>,
-    /// The start value of the input motor_torque, N·m, CCW positive (default: the
-    /// scenario's constant motor torque)
-    #[arg(long, value_name = "N·M", allow_negative_numbers = true, help_heading = CONVERTER)]
-    pub motor: Option<String>,
-    /// ccc-s2: the start value of the input load_torque T_r >= 0, N·m (default 800)
-    #[arg(long, value_name = "N·M", allow_negative_numbers = true, help_heading = CONVERTER)]
-    pub load: Option<String>,
-    /// ccc-s2: the shaft turns counter-clockwise (the start value of the parameter ccw)
-    #[arg(long, help_heading = CONVERTER)]
-    pub ccw: bool,
+    /// The twin's fixed step h and the default experiment's stop time.
+    #[command(flatten)]
+    pub time: TimeArgs,
+    /// The start values of the inputs motor_torque and load_torque and of the
+    /// parameter ccw.
+    #[command(flatten)]
+    pub converter: ConverterArgs,
     /// The FMU's binary, the structomat-fmu cdylib (default: libstructomat_fmu.so next
     /// to this host-sim executable, as `cargo build --release -p structomat-fmu -p
     /// host-sim` leaves it)
@@ -190,11 +195,8 @@ impl FmuArgs {
     pub fn options(&self) -> Result<FmuOptions, UsageError> {
         let run = RunArgs {
             scenario: self.scenario.clone(),
-            h: self.h.clone(),
-            t_end: self.t_end.clone(),
-            motor: self.motor.clone(),
-            load: self.load.clone(),
-            ccw: self.ccw,
+            time: self.time.clone(),
+            converter: self.converter.clone(),
             quiet: true,
             ..RunArgs::default()
         }
