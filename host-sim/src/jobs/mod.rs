@@ -3,5 +3,6 @@
 //! pipeline of [`crate::run`].
 
 pub mod batch;
+pub mod design;
 pub mod pool;
 pub mod sweep;
