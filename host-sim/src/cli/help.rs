@@ -176,7 +176,8 @@ constraints with the best objective; example: examples/design/s2-800.toml
   [search]            population (16), generations (20), seed (1), weight F (0.7),
                       crossover CR (0.9): differential evolution, DE/rand/1/bin
   [front]             loads = [..]: one more search per load (the first point's motor
-                      and horizon), drawn as front.svg/.png; population, generations
+                      and horizon), each from the main search's best feasible
+                      design, drawn as front.svg/.png; population, generations
                       (default: [search]'s)
   Constraints by Deb's rule: a feasible design beats every infeasible one; two
   infeasible ones compare by their total violation (designs.csv's v_* columns, each

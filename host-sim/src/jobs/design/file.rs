@@ -146,6 +146,9 @@ pub struct Design {
     pub front_search: Search,
     /// Runs at a time from the file (`--threads` overrides it).
     pub threads: Option<usize>,
+    /// A design the search starts from instead of the base's values (a front's
+    /// searches start from the main search's best).
+    pub start_point: Option<Vec<f64>>,
 }
 
 #[derive(serde::Deserialize)]
@@ -282,10 +285,12 @@ impl Design {
         d
     }
 
-    /// The base's values of the free parameters, if every one is a number inside its
-    /// bounds.
+    /// The design the search starts from: [`Design::start_point`], else the base's
+    /// values of the free parameters if every one is a number inside its bounds.
     pub fn start(&self) -> Option<Vec<f64>> {
-        self.free.iter().map(|f| f.base).collect()
+        self.start_point
+            .clone()
+            .or_else(|| self.free.iter().map(|f| f.base).collect())
     }
 }
 
@@ -475,6 +480,7 @@ pub fn parse_design(
         front,
         front_search,
         threads: file.threads,
+        start_point: None,
     };
     check_keys(&design).map_err(err)?;
     Ok(design)

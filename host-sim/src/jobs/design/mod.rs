@@ -137,7 +137,12 @@ pub fn execute(opts: &DesignOptions, stdout: &mut dyn Write, stderr: &mut dyn Wr
         if interrupt::requested() {
             break;
         }
-        let dl = d.at_load(load);
+        let mut dl = d.at_load(load);
+        // Each load's search starts from the main search's best feasible design.
+        dl.start_point = main
+            .best_row()
+            .filter(|b| b.score.is_feasible())
+            .map(|b| b.x.clone());
         if !quiet {
             let _ = writeln!(stderr, "design    front: T_r = {load} N·m");
         }
