@@ -9,7 +9,7 @@ import pytest
 import structomat
 from structomat import _core
 
-# S2 against 150 N·m for 0.05 s, two free parameters, 3 generations of 5 designs.
+# S2 against 150 N·m for 0.15 s, two free parameters, 3 generations of 5 designs.
 DESIGN = '''
 base = "ccc-s2"
 [[free]]
@@ -23,7 +23,7 @@ max = 0.4
 [[point]]
 load = 150.0
 motor = 12.0
-horizon = 0.05
+horizon = 0.15
 [search]
 population = 5
 generations = 2
@@ -64,6 +64,6 @@ def test_dask_design_equals_host_sim(design_file, reference):
 
 def test_a_bad_design_file_raises_before_anything_runs(tmp_path):
     f = tmp_path / "bad.toml"
-    f.write_text(DESIGN.replace("horizon = 0.05", "horizon = -1.0"))
+    f.write_text(DESIGN.replace("horizon = 0.15", "horizon = -1.0"))
     with pytest.raises(structomat.Error, match="point 1: horizon = -1"):
         structomat.design(f)

@@ -140,13 +140,13 @@ impl Evolution {
                 .map(|_| (0..n).map(|_| self.rng.rand_float()).collect())
                 .collect();
             if let (Some(start), Some(first)) = (&self.settings.start, pop.first_mut()) {
-                *first = self.to_unit(start);
+                *first = self.in_unit(start);
             }
             pop
         } else {
             (0..np).map(|i| self.trial(i)).collect()
         };
-        self.asked.iter().map(|u| self.from_unit(u)).collect()
+        self.asked.iter().map(|u| self.in_bounds(u)).collect()
     }
 
     /// The scores of the points of the last `ask`, in its order: each trial replaces
@@ -182,7 +182,7 @@ impl Evolution {
     /// The best point so far (parameters' units) and its score; the first of equals in
     /// population order.
     pub fn best(&self) -> Option<(Vec<f64>, Score)> {
-        self.best.as_ref().map(|(u, s)| (self.from_unit(u), *s))
+        self.best.as_ref().map(|(u, s)| (self.in_bounds(u), *s))
     }
 
     /// Member `i`'s trial: `a + F·(b − c)` of three distinct others, crossed over
@@ -226,14 +226,14 @@ impl Evolution {
         out
     }
 
-    fn from_unit(&self, u: &[f64]) -> Vec<f64> {
+    fn in_bounds(&self, u: &[f64]) -> Vec<f64> {
         u.iter()
             .zip(&self.settings.bounds)
             .map(|(x, (lo, hi))| lo + x * (hi - lo))
             .collect()
     }
 
-    fn to_unit(&self, x: &[f64]) -> Vec<f64> {
+    fn in_unit(&self, x: &[f64]) -> Vec<f64> {
         x.iter()
             .zip(&self.settings.bounds)
             .map(|(v, (lo, hi))| ((v - lo) / (hi - lo)).clamp(0.0, 1.0))

@@ -255,6 +255,7 @@ pub fn execute(opts: &DesignOptions, stdout: &mut dyn Write, stderr: &mut dyn Wr
         }
     }
     if !quiet {
+        let front_designs = front_runs.iter().map(|(_, o)| o.rows.len()).sum();
         let _ = summary(
             stdout,
             &d,
@@ -265,6 +266,7 @@ pub fn execute(opts: &DesignOptions, stdout: &mut dyn Write, stderr: &mut dyn Wr
             &files,
             &winner_lines,
             &front,
+            front_designs,
         );
     }
     if interrupt::requested() {
@@ -316,17 +318,24 @@ fn summary(
     files: &[String],
     winner: &[String],
     front: &[FrontPoint],
+    front_designs: usize,
 ) -> io::Result<()> {
-    let searches = 1 + front.len();
+    let front_part = if front.is_empty() {
+        String::new()
+    } else {
+        format!(
+            " and {front_designs} in the front's {} searches",
+            front.len()
+        )
+    };
     writeln!(
         w,
-        "design    {} designs of {} ({} free, {} point{}) in {searches} search{} on {threads} thread{} in {wall:.1} s",
+        "design    {} designs of {} ({} free, {} point{}){front_part} on {threads} thread{} in {wall:.1} s",
         main.rows.len(),
         d.base,
         d.free.len(),
         d.points.len(),
         if d.points.len() == 1 { "" } else { "s" },
-        if searches == 1 { "" } else { "es" },
         if threads == 1 { "" } else { "s" },
     )?;
     match main.best_row() {

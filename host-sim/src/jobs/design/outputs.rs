@@ -124,13 +124,14 @@ pub fn shown(d: &Design, objective: f64) -> f64 {
 /// The objective's description with its unit.
 pub fn describe(d: &Design) -> &'static str {
     match d.objective {
-        Objective::MeanPower => "mean power to the load over the last half, W",
+        Objective::MeanPower => "mean power to the load, W",
         Objective::FirstBreakaway => "first breakaway, s",
     }
 }
 
-/// The convergence plot: the best feasible objective after each generation, and the
-/// share of feasible designs in each generation.
+/// The convergence plot: the best feasible objective after each generation (for the
+/// mean power: over the last half of the horizon), and the share of feasible designs
+/// in each generation.
 pub fn convergence(d: &Design, out: &Outcome, title: &str) -> Vec<Plot> {
     let gens: Vec<f64> = (0..out.history.len()).map(|g| g as f64).collect();
     let best: Vec<f64> = out
@@ -258,13 +259,18 @@ pub fn front_plot(d: &Design, front: &[FrontPoint]) -> Plot {
     };
     let mut base = Series::new("base geometry", loads.clone(), pick(|f| f.base));
     base.dashed = true;
-    Plot::new(
-        format!("the front over loads ({}): one search per load", d.base),
-        "load T_r, N·m",
-        describe(d),
-    )
-    .with(Series::new("best design found", loads, pick(|f| f.best)))
-    .with(base)
+    let none: Vec<String> = front
+        .iter()
+        .filter(|f| f.best.is_none())
+        .map(|f| f.load.to_string())
+        .collect();
+    let mut title = format!("the best design per load ({}, one search each)", d.base);
+    if !none.is_empty() {
+        title.push_str(&format!("; none feasible at {} N·m", none.join(", ")));
+    }
+    Plot::new(title, "load T_r, N·m", describe(d))
+        .with(Series::new("best design found", loads, pick(|f| f.best)))
+        .with(base)
 }
 
 /// Writes a figure as `stem.svg` and `stem.png` in `dir`.

@@ -104,12 +104,16 @@ pub fn evaluate_all(
     out
 }
 
+/// What evaluates a generation: `(generation, designs)` to each design's evaluations
+/// at every point, in the designs' order.
+pub type Evaluator<'a> = dyn FnMut(usize, &[Vec<f64>]) -> Vec<Vec<Evaluation>> + 'a;
+
 /// Runs the search of `d` with `evaluate(generation, points)` evaluating each
 /// generation (on the pool, or elsewhere: Dask); `report(generation, outcome so far)`
 /// after each.
 pub fn search_with(
     d: &Design,
-    evaluate: &mut dyn FnMut(usize, &[Vec<f64>]) -> Vec<Vec<Evaluation>>,
+    evaluate: &mut Evaluator<'_>,
     report: &mut dyn FnMut(usize, &Outcome),
 ) -> Outcome {
     let mut de = Evolution::new(settings(d));
