@@ -14,7 +14,8 @@ Scenarios: slider-crank, five-bar (mechanisms);
   Each ships as a run file, host-sim/scenarios/<name>.toml (embedded): copy one to
   start your own.
 Examples: host-sim/mechanisms/*.toml (run files), host-sim/sweeps/*.toml (sweep
-  files), host-sim/batches/*.batch (batch files).
+  files), host-sim/batches/*.batch (batch files), examples/design/*.toml (design
+  files).
 
 Exit status: 0 success, 1 run failure (step error, file error), 2 bad arguments or a
 bad run file.

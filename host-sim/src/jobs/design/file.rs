@@ -33,7 +33,7 @@
 //! (a key the run file does not take is refused with its own message), every point's
 //! numbers are finite and in range, the search's settings in range.
 
-use super::super::sweep::{load_base, number};
+use crate::jobs::sweep::{load_base, number};
 use crate::model::runfile::{self, set_dotted_in as set_dotted};
 use crate::options::MAX_THREADS;
 use std::fmt;
@@ -294,7 +294,7 @@ impl Design {
     }
 }
 
-/// Parses a design file (`load_base` as [`parse_sweep`](super::super::sweep::parse_sweep)'s).
+/// Parses a design file (`load_base` as [`parse_sweep`](crate::jobs::sweep::parse_sweep)'s).
 pub fn parse_design(
     text: &str,
     origin: &str,
