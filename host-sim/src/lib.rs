@@ -33,7 +33,7 @@
 //!    and its observers: the CSV writer, the plots' table, the animation's frames.
 //! 5. [`run`]: the runners (mechanism and converter) and the one pipeline that drives
 //!    either through the observers ([`run::execute`]).
-//! 6. [`jobs`]: many runs: the worker pool, batches and sweeps.
+//! 6. [`jobs`]: many runs: the worker pool, batches, sweeps and design searches.
 //! 7. [`cli`]: the command line on top of everything ([`main_with`]); the binary is a
 //!    thin wrapper over it.
 //!

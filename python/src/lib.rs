@@ -13,8 +13,9 @@
 //!    options.
 //! 2. [`table`]: the observer that gathers a run's tables (the state table and the
 //!    converter's logs) column by column.
-//! 3. [`run`], [`twin`] and [`sweep`]: the module's functions and classes.
+//! 3. [`run`], [`twin`], [`sweep`] and [`design`]: the module's functions and classes.
 
+pub mod design;
 pub mod errors;
 pub mod options;
 pub mod run;
@@ -35,6 +36,10 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(sweep::sweep_plan, m)?)?;
     m.add_function(wrap_pyfunction!(sweep::sweep_run, m)?)?;
     m.add_function(wrap_pyfunction!(sweep::sweep_write, m)?)?;
+    m.add_function(wrap_pyfunction!(design::design_ask, m)?)?;
+    m.add_function(wrap_pyfunction!(design::design_evaluate, m)?)?;
+    m.add_function(wrap_pyfunction!(design::design_best, m)?)?;
+    m.add_function(wrap_pyfunction!(design::design_search, m)?)?;
     m.add_class::<twin::Twin>()?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())

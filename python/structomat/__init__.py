@@ -16,7 +16,8 @@ from typing import Any, Dict, List, Optional, Union
 from . import _core
 from ._core import Error, Twin, TwinError, __version__
 
-__all__ = ["Error", "Result", "Twin", "TwinError", "run", "scenarios", "sweep", "__version__"]
+__all__ = ["Error", "Result", "Twin", "TwinError", "design", "run", "scenarios", "sweep",
+           "__version__"]
 
 
 class Result:
@@ -118,3 +119,44 @@ def sweep(path: Union[str, "os.PathLike[str]"], out_dir: Union[str, "os.PathLike
     outcomes = [o for part in parts for o in part]
     table, heatmaps = _core.sweep_write(path, out_dir, outcomes)
     return {"variants": n, "table": table, "heatmaps": heatmaps, "tasks": len(chunks)}
+
+
+def _design_task(path: str, x: List[float]) -> tuple:
+    """A Dask task: design ``x`` of the design file ``path`` at every operating point
+    (the GIL released), its score ``(violation, objective)``."""
+    return _core.design_evaluate(path, list(x))
+
+
+def design(path: Union[str, "os.PathLike[str]"], client: Any = None) -> Dict[str, Any]:
+    """Runs the design file ``path``'s search (``host-sim design``'s optimizer), each
+    generation's designs evaluated as Dask tasks, one design a task, on ``client``'s
+    workers (``None``: here, in this process). The optimizer is replayed from its seed
+    and the scores gathered in member order, so the best design is host-sim's, bit for
+    bit, whatever runs the tasks. The file must be readable at the same path on the
+    workers. A bad design file raises :class:`Error` before anything runs.
+
+    Returns ``{"best": [free values], "violation", "objective", "feasible",
+    "history": [[(violation, objective), ...] per generation], "tasks"}``; the
+    objective is minimised (minus the mean power for ``mean_power``).
+    """
+    path = os.path.abspath(os.fspath(path))
+    history: List[List[tuple]] = []
+    tasks = 0
+    while True:
+        points = _core.design_ask(path, history)
+        if points is None:
+            break
+        if client is None:
+            scores = [_design_task(path, x) for x in points]
+        else:
+            futures = [client.submit(_design_task, path, x, pure=False) for x in points]
+            scores = client.gather(futures)
+        tasks += len(points)
+        history.append([tuple(s) for s in scores])
+    best = _core.design_best(path, history)
+    if best is None:
+        raise Error(f"{path}: no design was evaluated")
+    x, violation, objective = best
+    return {"best": list(x), "violation": violation, "objective": objective,
+            "feasible": violation == 0.0 and objective == objective,
+            "history": history, "tasks": tasks}

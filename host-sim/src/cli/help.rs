@@ -14,7 +14,8 @@ Scenarios: slider-crank, five-bar (mechanisms);
   Each ships as a run file, host-sim/scenarios/<name>.toml (embedded): copy one to
   start your own.
 Examples: host-sim/mechanisms/*.toml (run files), host-sim/sweeps/*.toml (sweep
-  files), host-sim/batches/*.batch (batch files).
+  files), host-sim/batches/*.batch (batch files), examples/design/*.toml (design
+  files).
 
 Exit status: 0 success, 1 run failure (step error, file error), 2 bad arguments or a
 bad run file.
@@ -158,6 +159,40 @@ base run, N at a time; example: host-sim/sweeps/mass-motor.toml
   heat-map's metric and the variant that gave it. A variant that fails is a row
   (end = singularity or failed, as in batch.csv), not a failure of the sweep: exit
   status 0 when the files are written.";
+
+/// After the options in `host-sim design --help`: the design file and the files written.
+pub const DESIGN: &str = "\
+Design (host-sim design FILE --out-dir DIR): a search for the converter that meets the
+constraints with the best objective; example: examples/design/s2-800.toml
+  base = \"ccc-s2\"     a converter scenario, or a run file (path relative to FILE)
+  [set]               fixed changes to the base, by dotted key (as a sweep's)
+  [[free]]            key (a numeric dotted key), min, max, label: a free parameter
+  [[point]]           load (T_r, N·m), motor (N·m; else the base's), horizon (s)
+  [objective]         metric = \"mean_power\" (mean power to the load over the last
+                      half of the horizon, maximised; the lowest over the points) or
+                      \"first_breakaway\" (minimised)
+  [constraints]       margin = δ (m, default 0.005): |DH| <= rod + lever - δ at every
+                      step; no_jam, assembly (every 5° of the crank at the initial swing
+                      angle), horizon (the twin reaches it): true by default
+  [search]            population (16), generations (20), seed (1), weight F (0.7),
+                      crossover CR (0.9): differential evolution, DE/rand/1/bin
+  [front]             loads = [..]: one more search per load (the first point's motor
+                      and horizon), each from the main search's best feasible
+                      design, drawn as front.svg/.png; population, generations
+                      (default: [search]'s)
+  Constraints by Deb's rule: a feasible design beats every infeasible one; two
+  infeasible ones compare by their total violation (designs.csv's v_* columns, each
+  0..1). The search starts from the base's values when they are inside the bounds.
+  Everything is checked before anything runs (exit status 2, the field named); the
+  files do not depend on --threads.
+  --out-dir DIR      where the files go (created if missing)
+  --threads N        runs at a time, on N threads
+  --no-winner        do not run the winner (its files and the check at h/2)
+Files: best.toml (the winner as a run file at the first point), designs.csv (every
+  design at every point: search, generation, member, the free values, how it ended,
+  the margin, the jam, the objective, the violations), convergence.svg/.png, front.csv
+  and front.svg/.png with [front], winner/ (run.csv, its logs, plots, run.gif) and
+  the winner at h/2 in the summary.";
 
 /// After the options in `host-sim replay --help`: the logs, the columns, the summary.
 pub const REPLAY: &str = "\

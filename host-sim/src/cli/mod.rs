@@ -5,13 +5,13 @@ pub mod commands;
 pub mod help;
 
 use crate::error::{report_write, UsageError, EXIT_FAILURE, EXIT_OK, EXIT_USAGE, HINT};
-use crate::jobs::{batch, sweep};
+use crate::jobs::{batch, design, sweep};
 use crate::model::scenarios::Source;
 use crate::options::args::{
-    AnalyzeArgs, BatchArgs, FmuArgs, PlotArgs, ReplayArgs, RunArgs, SweepArgs,
+    AnalyzeArgs, BatchArgs, DesignArgs, FmuArgs, PlotArgs, ReplayArgs, RunArgs, SweepArgs,
 };
 use crate::options::{
-    BatchOptions, FmuOptions, PlotOptions, ReplayOptions, RunOptions, SweepOptions,
+    BatchOptions, DesignOptions, FmuOptions, PlotOptions, ReplayOptions, RunOptions, SweepOptions,
 };
 use crate::output::pictures;
 use crate::run;
@@ -61,6 +61,10 @@ pub enum CliCommand {
     /// Run a grid of variants of a run (a sweep file) and write a table and heat-maps
     #[command(after_long_help = help::SWEEP)]
     Sweep(SweepArgs),
+    /// Search a converter design (a design file): the best run file, every design's
+    /// table, the convergence, the front over loads and the winner's run
+    #[command(after_long_help = help::DESIGN)]
+    Design(DesignArgs),
     /// Plot a CSV that host-sim run wrote (as run --plot)
     Plot(PlotArgs),
     /// Package the converter's twin as an FMI 2.0 Co-Simulation FMU (the converter
@@ -86,6 +90,8 @@ pub enum Command {
     Plot(PlotOptions),
     /// `host-sim sweep FILE --out-dir DIR [options]`.
     Sweep(SweepOptions),
+    /// `host-sim design FILE --out-dir DIR [options]`.
+    Design(DesignOptions),
     /// `host-sim fmu [SCENARIO|FILE.toml] --out FILE.fmu [options]`.
     Fmu(FmuOptions),
 }
@@ -116,6 +122,7 @@ where
         CliCommand::Analyze(a) => a.source().map(Command::Analyze),
         CliCommand::Batch(a) => a.options().map(Command::Batch),
         CliCommand::Sweep(a) => a.options().map(Command::Sweep),
+        CliCommand::Design(a) => a.options().map(Command::Design),
         CliCommand::Plot(a) => a.options().map(Command::Plot),
         CliCommand::Fmu(a) => a.options().map(Command::Fmu),
     };
@@ -151,6 +158,7 @@ where
         Ok(Command::Batch(opts)) => batch::execute(&opts, stdout, stderr),
         Ok(Command::Plot(opts)) => pictures::plot_csv(&opts, stdout, stderr),
         Ok(Command::Sweep(opts)) => sweep::execute(&opts, stdout, stderr),
+        Ok(Command::Design(opts)) => design::execute(&opts, stdout, stderr),
         Ok(Command::Fmu(opts)) => run::fmu::execute(&opts, stdout, stderr),
         Err(ParseError::Clap(e)) => {
             let text = e.render().to_string();

@@ -1,7 +1,8 @@
-//! Many runs: the worker pool ([`pool`]), the runs of a batch file ([`batch`]) and the
-//! grid of variants of a parameter sweep ([`sweep`]), each run through the one
-//! pipeline of [`crate::run`].
+//! Many runs: the worker pool ([`pool`]), the runs of a batch file ([`batch`]), the
+//! grid of variants of a parameter sweep ([`sweep`]) and the generations of a design
+//! search ([`design`]), each run through [`crate::run`].
 
 pub mod batch;
+pub mod design;
 pub mod pool;
 pub mod sweep;

@@ -6,8 +6,9 @@
 //! and repeated options.
 
 use super::{
-    AnimFormat, BatchOptions, FmuOptions, Output, PlotOptions, ProgressStyle, ReplayOptions,
-    RunOptions, SweepOptions, DEFAULT_FPS, DEFAULT_SLOW, FPS_RANGE, MAX_THREADS, SLOW_RANGE,
+    AnimFormat, BatchOptions, DesignOptions, FmuOptions, Output, PlotOptions, ProgressStyle,
+    ReplayOptions, RunOptions, SweepOptions, DEFAULT_FPS, DEFAULT_SLOW, FPS_RANGE, MAX_THREADS,
+    SLOW_RANGE,
 };
 use crate::error::{usage_err, Sci, UsageError};
 use crate::model::bench::{BenchLog, ClutchLog};
@@ -332,6 +333,34 @@ impl SweepArgs {
                 None => ProgressStyle::Auto,
             },
             keep_runs: self.keep_runs,
+            quiet: self.jobs.quiet,
+        })
+    }
+}
+
+/// The arguments of `host-sim design`.
+#[derive(Args, Clone, Debug, PartialEq)]
+pub struct DesignArgs {
+    /// The design file (TOML): a base converter, the free parameters and their bounds,
+    /// the operating points, the objective, the constraints, the search
+    #[arg(value_name = "FILE")]
+    pub file: String,
+    /// The output and the threads.
+    #[command(flatten)]
+    pub jobs: JobArgs,
+    /// Do not run the winner (its CSV, plots, animation and the check at h/2)
+    #[arg(long)]
+    pub no_winner: bool,
+}
+
+impl DesignArgs {
+    /// The checked options.
+    pub fn options(&self) -> Result<DesignOptions, UsageError> {
+        Ok(DesignOptions {
+            file: parse_path("design", &self.file)?,
+            out_dir: self.jobs.out_dir()?,
+            threads: self.jobs.threads()?,
+            no_winner: self.no_winner,
             quiet: self.jobs.quiet,
         })
     }

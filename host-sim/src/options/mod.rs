@@ -217,6 +217,21 @@ pub struct SweepOptions {
     pub quiet: bool,
 }
 
+/// Options of `host-sim design`.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct DesignOptions {
+    /// The design file.
+    pub file: PathBuf,
+    /// Where the best design, the table and the pictures go.
+    pub out_dir: PathBuf,
+    /// Runs at a time (`None`: the file's `threads`, else 2).
+    pub threads: Option<usize>,
+    /// Skip the winner's run (its CSV, plots and animation) and its check at h/2.
+    pub no_winner: bool,
+    /// No progress, no closing summary.
+    pub quiet: bool,
+}
+
 /// The most steps a run may take (a guard against `--h 1e-300`).
 pub const MAX_STEPS: u64 = 1_000_000_000;
 
