@@ -197,9 +197,9 @@ fn a_correction_moves_the_crank_and_books_its_energy() {
 /// A twin with no model error (the machine's own twin and inputs), observed through
 /// its encoders in f64 and in f32: it makes the machine's 23 events of S2 in the
 /// machine's order (the same kinds and modes), each within 10 ms, raises no
-/// diagnostic, and stays within 16 counts of the machine's crank (measured: 9.2 counts
-/// in f64, a regression bound, not the target; see the README's observer
-/// paragraph).
+/// diagnostic, and stays within 16 counts of the machine's crank (a regression bound,
+/// not the target of 0: the corrections carry the counts' quantization into the
+/// state; see the README's observer paragraph).
 #[test]
 fn with_no_model_error_the_observer_keeps_the_machine_s_events() {
     fn run<T: Real>() {

@@ -172,7 +172,7 @@ impl fmt::Display for ObservedSummary {
         )?;
         writeln!(
             f,
-            "          after {SETTLE} s: innovation {}; residual (measured - corrected) {}",
+            "          after {SETTLE} s: innovation {}; {} (after the update)",
             self.innovation_settled, self.residual_settled
         )?;
         writeln!(

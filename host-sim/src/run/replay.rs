@@ -396,6 +396,14 @@ pub fn simulate_with<T: Real>(
         load: T::c(log.load[k]),
         measured: observer.and_then(|_| observed::measurement(log, k + 1)),
     };
+    let mut settings = settings;
+    if observer.is_some() {
+        // The filter's state starts from the first measurement, as a Kalman filter's
+        // does: the crank at the middle of the log's first count (the rest of the
+        // initial state, the swing link's angle and the speeds, is the run file's).
+        let first = (log.crank[0] as f64 + 0.5) * std::f64::consts::TAU / COUNTS_PER_TURN as f64;
+        settings.converter.crank_deg = first.to_degrees();
+    }
     let mut twin = new_twin(name, &settings, h, start)?;
     let mut law = EncoderLaw::new(&twin, log.crank[0]);
     if observer.is_some() {

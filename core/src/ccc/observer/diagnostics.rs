@@ -96,6 +96,12 @@ pub struct BiasWatch<T> {
     pub weight: [T; 2],
 }
 
+impl<T: Real> Default for BiasWatch<T> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
 impl<T: Real> BiasWatch<T> {
     /// Nothing averaged yet.
     pub fn new() -> Self {

@@ -86,8 +86,8 @@ mod tests {
     /// update), step after step to the steady state.
     #[test]
     fn joseph_form_matches_the_simple_form_and_the_information_form() {
-        let (h, q, r) = (1e-3, 50.0, 2e-7);
-        let mut p = Covariance::diagonal(0.1, 5.0);
+        let (h, q, r): (f64, f64, f64) = (1e-3, 50.0, 2e-7);
+        let mut p = Covariance::<f64>::diagonal(0.1, 5.0);
         for _ in 0..2000 {
             let prior = p.predict(h, q);
             let k = prior.gain(r);

@@ -62,6 +62,10 @@ pub struct ObserverSettings<T> {
     pub slip_counts: T,
     /// Time constant of the load-bias averages, s.
     pub bias_time: T,
+    /// The least `|∂θ1/∂q|` at which the crank's angle corrects the state: near the
+    /// crank's reversals (0 there) its angle hardly moves with the state, and a crank
+    /// correction is a large, noisy change of the coordinate.
+    pub min_transmission: T,
     /// The difference of the averages that is a load bias, rad/s².
     pub bias_limit: T,
 }
@@ -78,6 +82,7 @@ impl<T: Real> ObserverSettings<T> {
             jump_run: 5,
             slip_counts: T::c(4.0),
             bias_time: T::c(0.05),
+            min_transmission: T::c(0.3),
             bias_limit: T::c(200.0),
         }
     }
@@ -185,7 +190,8 @@ impl<T: Real> TwinObserver<T> {
             // the machine's mode sequence at 0.22 s of S2 so), so there the filter only
             // predicts; the 1-DOF modes (I6, I8, A68), where the crank is the whole
             // state, take the update.
-            let observable = twin.q().len() == 1;
+            let observable =
+                twin.q().len() == 1 && twin.crank_transmission()[0].abs() >= s.min_transmission;
             if jump && self.jumps < s.jump_run {
                 self.jumps += 1;
                 up.diagnostics.insert(Diagnostic::EncoderJump("crank"));

@@ -70,6 +70,12 @@ impl<T: Real> Twin<T> {
             .unwrap_or(&[])
     }
 
+    /// The crank's transmission `∂θ1/∂q` (= `∂ω1/∂q̇`) over the current coordinates
+    /// (`[..dof]`): 1 where the crank is a coordinate, 0 at the crank's reversals.
+    pub fn crank_transmission(&self) -> [T; 2] {
+        self.slots.cur().omega_row(CRANK)
+    }
+
     /// Their accelerations, rad/s².
     pub fn qdd(&self) -> &[T] {
         self.slots
