@@ -424,6 +424,10 @@ pub struct Logged {
     pub to: Mode,
 }
 
+/// What takes one step of a twin under its inputs (the twin's own step, or an
+/// observer's).
+pub type StepFn<'a, T> = dyn FnMut(&mut Twin<T>, &Inputs<T>) -> Result<(), TwinStepError> + 'a;
+
 /// What appends a run's own cells to a state row, for the twin's present state.
 pub type ExtraCells<'a, T> = dyn FnMut(&Twin<T>, &mut Vec<Cell<'static, T>>) + 'a;
 
@@ -506,7 +510,7 @@ impl Drive {
         &self,
         twin: &mut Twin<T>,
         inputs: &mut dyn FnMut(u64) -> Inputs<T>,
-        step: &mut dyn FnMut(&mut Twin<T>, &Inputs<T>) -> Result<(), TwinStepError>,
+        step: &mut StepFn<'_, T>,
         extra: &mut Extra<'_, T>,
         obs: &mut dyn Observer<T>,
     ) -> Result<Driven, RunError> {

@@ -34,7 +34,7 @@ pub const SETTLE: f64 = 0.02;
 pub fn measurement<T: Real>(log: &BenchLog, k: usize) -> Option<Measurement<T>> {
     let encoder = |counts: i64| Encoder {
         counts,
-        per_turn: COUNTS_PER_TURN as u32,
+        per_turn: COUNTS_PER_TURN,
         zero: T::zero(),
     };
     Some(Measurement {
@@ -123,7 +123,7 @@ impl ObservedSummary {
             return;
         };
         let time = twin.time().to_f64();
-        let res = std::f64::consts::TAU / COUNTS_PER_TURN as f64;
+        let res = std::f64::consts::TAU / f64::from(COUNTS_PER_TURN);
         let nu = up.innovation.map(|n| n.to_f64() / res);
         if let Some(n) = nu {
             self.innovation.add(n, time);
