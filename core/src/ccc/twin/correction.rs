@@ -5,8 +5,9 @@
 //! coordinates `q` are (the twin switches them at dead points). A correction
 //! `(δθ1, δω1)` is mapped into the current coordinates through the transmission's crank
 //! row `r = ∂θ1/∂q` (= `∂ω1/∂q̇`, the crank's row of `V`, SPEC 1) by its least-norm
-//! inverse, `δq = rᵀ δθ1 / |r|²`, `δq̇ = rᵀ δω1 / |r|²`: exact for one degree of freedom
-//! to first order, and in a 2-DOF mode the change of the coordinates that moves the
+//! inverse, `δq = rᵀ δθ1 / |r|²`, then `δq̇` from the row at the moved positions (so the
+//! crank's speed is the one asked for): exact for one degree of freedom to first
+//! order, and in a 2-DOF mode the change of the coordinates that moves the
 //! crank and leaves the rest as still as it can (with the crank a coordinate,
 //! `r = (1, 0)`: the other coordinate is left as it is). The positions are then re-solved
 //! and the speeds set by the mode's own kinematics, so the state stays on its
@@ -110,9 +111,10 @@ impl<T: Real> Twin<T> {
     /// the present time, in the present mode and coordinates (the module's doc): the
     /// positions re-solved, the speeds set through the transmission, the energy the
     /// change puts in booked in the audit's own term, the event functions evaluated at
-    /// the new state and a mode change made (and logged with the last step's events)
-    /// if one fired. On an error (a group that does not assemble at the corrected
-    /// state, or a mode choice that fails) the twin keeps its state.
+    /// the new state; a correction that would take one past its crossing is cut short
+    /// of it (the next step takes the event), one near a dead point of the crank in
+    /// the coordinates scaled to 0.1 rad and 10 rad/s of them. On an error (a group
+    /// that does not assemble at the corrected state) the twin keeps its state.
     pub fn correct_crank(
         &mut self,
         d_theta: T,

@@ -10,7 +10,8 @@
 //! location inside a step (`locate.rs`); the mode choice at an event (`choice.rs`),
 //! each candidate built and judged (`candidate.rs`) by the consistency conditions
 //! (`consistency.rs`) after the plastic impact (`impact.rs`); coordinate choice and
-//! switching (`coordinates.rs`); one mode's model and workspace (`slot.rs`), the three
+//! switching (`coordinates.rs`); a correction of the state in crank terms, an
+//! observer's update (`correction.rs`); one mode's model and workspace (`slot.rs`), the three
 //! working slots (`slots.rs`) and their staged evaluation (`evaluate.rs`); the energy
 //! audit (`audit.rs`).
 //!
@@ -87,7 +88,7 @@ use slots::Slots;
 /// a step); no indexing on the step path can panic, and a failed step returns an error
 /// and keeps the last good state.
 ///
-/// **Size.** `size_of::<Twin<f64>>()` is 63 528 B (62.0 KiB), `Twin<f32>` 32 744 B
+/// **Size.** `size_of::<Twin<f64>>()` is 63 552 B (62.1 KiB), `Twin<f32>` 32 752 B
 /// (32.0 KiB) on x86_64: three slots, each a model and a workspace sized for the
 /// converter; the mode choice builds its reference model in the one it leaves free
 /// (the core asserts the budgets at compile time: 64 KiB and 32 KiB). A step's
