@@ -13,7 +13,11 @@
 //! - `twin/switch_step`: the first step with a change of independent coordinates and
 //!   no event;
 //! - `twin/event_step/worst`: the slowest step of the worst-step report below (chosen
-//!   at run time).
+//!   at run time);
+//! - `twin/observer_step/I`, `twin/observer_step/A`: the windows of `plain_step/I` and
+//!   `/A` stepped by the observer ([`TwinObserver::step`]: the twin's step, then the
+//!   update from the crank's and shaft's encoders, 4096 counts a turn, read from the
+//!   twin's own run), its cost against the plain step's.
 //!
 //! **Reading the numbers.** Every `time:` is **per twin step**; the clone of the twin
 //! (several KB) is never timed. They are measured with `iter_custom`: each iteration
@@ -43,7 +47,10 @@
 use criterion::{criterion_group, criterion_main, Criterion};
 use std::hint::black_box;
 use std::time::{Duration, Instant};
-use structomat::ccc::{CccParams, EventKind, Inputs, Mode, MotorInput, Twin, TwinSettings};
+use structomat::ccc::{
+    CccParams, Encoder, EventKind, Inputs, Measurement, Mode, MotorInput, ObserverSettings, Twin,
+    TwinObserver, TwinSettings,
+};
 use structomat::motor::Motor;
 
 /// The step of S2, s.
@@ -390,12 +397,57 @@ fn benches(c: &mut Criterion) {
             })
         });
     }
+    for name in ["plain_step/I", "plain_step/A"] {
+        let Some(case) = cases.iter().find(|c| c.name == name) else {
+            continue;
+        };
+        let (twin, inputs) = twin_at(case.index);
+        // The encoders' readings at each step's end, from the twin's own run.
+        let mut machine = twin.clone();
+        let encoder = |x: f64| Encoder {
+            counts: (x / (std::f64::consts::TAU / 4096.0)).floor() as i64,
+            per_turn: 4096,
+            zero: 0.0,
+        };
+        let readings: Vec<Inputs<f64>> = (0..case.steps)
+            .map(|_| {
+                machine.step(&inputs).expect("the window's step");
+                Inputs {
+                    measured: Some(Measurement {
+                        crank: Some(encoder(machine.link(1).theta)),
+                        shaft: Some(encoder(machine.shaft_drive_angle())),
+                        rocker: None,
+                    }),
+                    ..inputs
+                }
+            })
+            .collect();
+        let observer = TwinObserver::new(ObserverSettings::reference());
+        let label = name.replace("plain_step", "observer_step");
+        g.bench_function(label.as_str(), |b| {
+            b.iter_custom(|iters| {
+                let mut total = Duration::ZERO;
+                for _ in 0..iters {
+                    let (mut t, mut o) = (twin.clone(), observer);
+                    let start = Instant::now();
+                    for r in &readings {
+                        if let Err(e) = black_box(&mut o).step(black_box(&mut t), black_box(r)) {
+                            panic!("{label}: {e}");
+                        }
+                    }
+                    total += start.elapsed();
+                    black_box(&t);
+                }
+                total / readings.len() as u32
+            })
+        });
+    }
     g.finish();
 }
 
 criterion_group! {
     name = twin_benches;
-    // 8 benches × (1 s warm-up + 4 s measurement + analysis): about 45 s in all.
+    // 10 benches × (1 s warm-up + 4 s measurement + analysis): about 45 s in all.
     config = Criterion::default()
         .warm_up_time(Duration::from_secs(1))
         .measurement_time(Duration::from_secs(4))

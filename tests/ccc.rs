@@ -5,7 +5,8 @@
 
 use structomat::ccc::{
     initial_pose, mode_model, CccParams, Clutch, Coordinates, DriveDirection, Event, EventKind,
-    Inputs, LinkState, Mode, MotorInput, Twin, TwinSettings, TwinSetupError, TwinStepError,
+    Inputs, LinkState, Measurement, Mode, MotorInput, Twin, TwinSettings, TwinSetupError,
+    TwinStepError,
 };
 use structomat::kinematics::{assemble, position};
 use structomat::motor::Motor;
@@ -807,8 +808,16 @@ fn bad_inputs_are_named_and_leave_the_state() {
             "motor law's constant torque",
             inf,
         ),
-        (measured((nan, 0.0)), "measured crank angle", nan),
-        (measured((0.0, -inf)), "measured crank speed", -inf),
+        (
+            measured(Measurement::crank(1194, 0, 0.0)),
+            "crank encoder resolution (counts per turn)",
+            0.0,
+        ),
+        (
+            measured(Measurement::crank(1194, 4096, -inf)),
+            "crank encoder zero",
+            -inf,
+        ),
     ];
     let before = format!("{b:?}");
     for (bad, want_field, want_value) in cases {

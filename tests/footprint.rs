@@ -107,7 +107,19 @@ fn s2_inputs<T: Real>() -> Inputs<T> {
     Inputs {
         motor: MotorInput::Law(Motor::Constant(T::c(12.0))),
         load: T::c(800.0),
-        measured: Some((T::c(0.1), T::c(1.0))),
+        measured: Some(structomat::ccc::Measurement {
+            crank: Some(structomat::ccc::Encoder {
+                counts: 1194,
+                per_turn: 4096,
+                zero: T::zero(),
+            }),
+            shaft: Some(structomat::ccc::Encoder {
+                counts: 0,
+                per_turn: 4096,
+                zero: T::zero(),
+            }),
+            rocker: None,
+        }),
     }
 }
 

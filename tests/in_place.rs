@@ -15,7 +15,19 @@ fn s2_inputs<T: Real>() -> Inputs<T> {
     Inputs {
         motor: structomat::ccc::MotorInput::Law(Motor::Constant(T::c(12.0))),
         load: T::c(800.0),
-        measured: Some((T::c(0.1), T::c(1.0))),
+        measured: Some(structomat::ccc::Measurement {
+            crank: Some(structomat::ccc::Encoder {
+                counts: 1194,
+                per_turn: 4096,
+                zero: T::zero(),
+            }),
+            shaft: Some(structomat::ccc::Encoder {
+                counts: 0,
+                per_turn: 4096,
+                zero: T::zero(),
+            }),
+            rocker: None,
+        }),
     }
 }
 
@@ -37,8 +49,8 @@ fn outputs<T: Real>(t: &Twin<T>) -> (Vec<u64>, String) {
     }
     let a = t.audit();
     reals.extend([a.residual(), a.kinetic, a.potential, a.initial]);
-    if let Some((da, dw)) = t.measurement_residual() {
-        reals.extend([da, dw]);
+    if let Some(r) = t.measurement_residual() {
+        reals.extend([r.crank, r.shaft, r.rocker].into_iter().flatten());
     }
     reals.push(t.conditioning());
     bits.extend(reals.iter().map(|x| x.to_f64().to_bits()));

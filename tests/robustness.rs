@@ -33,8 +33,8 @@ use std::sync::Once;
 use std::time::Instant;
 
 use structomat::ccc::{
-    Bar, CccParams, DriveDirection, Inputs, MotorInput, Side, Twin, TwinSettings, TwinSetupError,
-    TwinStepError,
+    Bar, CccParams, DriveDirection, Inputs, Measurement, MotorInput, Side, Twin, TwinSettings,
+    TwinSetupError, TwinStepError,
 };
 use structomat::config::{MAX_DOF, MAX_DRIVES, MAX_GROUND_POINTS, MAX_GROUPS, MAX_LINKS};
 use structomat::model::{Link, Load, ModelBuilder};
@@ -1253,9 +1253,16 @@ fn twin_snapshot<T: Real>(tw: &Twin<T>) -> Snap {
     s.f("audit potential", a.potential);
     s.f("audit initial", a.initial);
     s.f("audit residual", a.residual());
-    if let Some((da, dw)) = tw.measurement_residual() {
-        s.f("measurement residual angle", da);
-        s.f("measurement residual speed", dw);
+    if let Some(r) = tw.measurement_residual() {
+        for (name, v) in [
+            ("measurement residual crank", r.crank),
+            ("measurement residual shaft", r.shaft),
+            ("measurement residual rocker", r.rocker),
+        ] {
+            if let Some(v) = v {
+                s.f(name, v);
+            }
+        }
     }
     for e in tw.events() {
         s.text
@@ -1290,7 +1297,12 @@ fn inputs_invalid<T: Real>(i: &Inputs<T>) -> bool {
         MotorInput::Law(Motor::Asynchronous(a)) => !(a.a.finite() && a.b.finite() && a.c.finite()),
         MotorInput::Law(Motor::User(_)) => false,
     };
-    let measured_bad = i.measured.is_some_and(|(a, w)| !(a.finite() && w.finite()));
+    let measured_bad = i.measured.is_some_and(|m| {
+        [m.crank, m.shaft, m.rocker]
+            .into_iter()
+            .flatten()
+            .any(|e| e.per_turn == 0 || !e.zero.finite())
+    });
     motor_bad || measured_bad || !(i.load.finite() && i.load >= T::zero())
 }
 
@@ -1328,13 +1340,21 @@ fn random_inputs<T: Real>(
         1 => MotorInput::Torque(g.t(12.0)),
         _ => MotorInput::Law(random_motor(g, 12.0)),
     };
+    // The crank's encoder near the crank's angle (`crank.1`, its speed, is not
+    // measured by an encoder), its resolution and zero at the garbage rate.
+    let counts = (crank.0 / (std::f64::consts::TAU / 4096.0)).floor() as i64;
     let measured = match g.rng.below(3) {
         0 => None,
-        1 => Some((
-            T::c(crank.0 + g.any(-0.1, 0.1)),
-            T::c(crank.1 + g.any(-1.0, 1.0)),
+        1 => Some(Measurement::crank(
+            counts + g.rng.below(16) as i64 - 8,
+            4096,
+            T::c(g.any(-0.1, 0.1)),
         )),
-        _ => Some((g.t(crank.0), g.t(crank.1))),
+        _ => Some(Measurement::crank(
+            counts,
+            if g.rng.chance(g.garbage) { 0 } else { 4096 },
+            g.t(0.0),
+        )),
     };
     Inputs {
         motor,

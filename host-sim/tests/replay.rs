@@ -314,12 +314,6 @@ fn bad_logs_are_named_errors() {
         err.contains("--clutch-log: ") && err.contains("column event: missing"),
         "{err}"
     );
-    let (code, _, err) = run(&["replay", &data("bench1.csv"), "--observer", "--out", &out]);
-    assert_eq!(code, 2);
-    assert!(
-        err.contains("--observer: the observer is not built yet"),
-        "{err}"
-    );
     let (code, _, err) = run(&[
         "replay",
         &data("bench1.csv"),

@@ -14,7 +14,7 @@ use host_sim::output::Cell;
 use numpy::PyArray1;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
-use structomat::ccc::{Inputs, MotorInput, Twin as CoreTwin};
+use structomat::ccc::{Inputs, Measurement, MotorInput, Twin as CoreTwin};
 use structomat::Real;
 
 /// A twin in either precision.
@@ -52,12 +52,13 @@ fn inputs<T: Real>(
     load: f64,
     motor: Option<f64>,
     given_load: Option<f64>,
-    measured: Option<(f64, f64)>,
+    measured: Option<(i64, u32, f64)>,
 ) -> Inputs<T> {
     Inputs {
         motor: motor.map_or(law, |m| MotorInput::Torque(T::c(m))),
         load: T::c(given_load.unwrap_or(load)),
-        measured: measured.map(|(a, w)| (T::c(a), T::c(w))),
+        measured: measured
+            .map(|(counts, per_turn, zero)| Measurement::crank(counts, per_turn, T::c(zero))),
     }
 }
 
@@ -111,8 +112,9 @@ impl Twin {
 
     /// One step of `h` with the motor torque `motor` (N·m, CCW positive, held over the
     /// step; `None`: the scenario's motor law, evaluated at every stage), the load
-    /// torque `load` on the shaft (N·m ≥ 0; `None`: the scenario's) and optionally a
-    /// measured crank angle and speed `(rad, rad/s)` to compare against. A refused or
+    /// torque `load` on the shaft (N·m ≥ 0; `None`: the scenario's) and optionally the
+    /// crank encoder's reading `(counts, counts per turn, zero angle in rad)` to compare
+    /// against (the angle `zero + (counts + ½)·2π/per_turn`). A refused or
     /// failed step raises `structomat.TwinError` with the core's message and keeps the
     /// last good state.
     #[pyo3(signature = (motor = None, load = None, measured = None))]
@@ -120,7 +122,7 @@ impl Twin {
         &mut self,
         motor: Option<f64>,
         load: Option<f64>,
-        measured: Option<(f64, f64)>,
+        measured: Option<(i64, u32, f64)>,
     ) -> PyResult<()> {
         let r = match &mut self.twin {
             Any::F64(t) => t.step(&inputs(self.motor_law[0], self.load, motor, load, measured)),
@@ -279,11 +281,11 @@ impl Twin {
         Ok(d)
     }
 
-    /// The measured angle's and speed's residuals against the twin (rad, rad/s) of the
-    /// last step given a measurement, else `None`.
+    /// The twin's crank angle less the measured one (rad) of the last step given a
+    /// measurement, else `None`.
     #[getter]
-    fn measurement_residual(&self) -> Option<(f64, f64)> {
-        each!(self, t => t.measurement_residual().map(|(a, w)| (v(a), v(w))))
+    fn measurement_residual(&self) -> Option<f64> {
+        each!(self, t => t.measurement_residual().and_then(|r| r.crank).map(v))
     }
 
     /// The events of the last step (of the set-up before the first): dicts of the

@@ -98,8 +98,10 @@ fn twin<T: Real>(steps: u32) -> T {
         for p in 1..=8 {
             sum += twin.link(black_box(p)).theta;
         }
-        if let Some((a, b)) = twin.measurement_residual() {
-            sum += a + b;
+        if let Some(r) = twin.measurement_residual() {
+            for v in [r.crank, r.shaft, r.rocker].into_iter().flatten() {
+                sum += v;
+            }
         }
         sum += T::c((twin.events().len() + twin.switches().len()) as f64);
     }

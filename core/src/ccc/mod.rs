@@ -12,11 +12,15 @@ pub use mode::{Clutch, Coordinates, Mode};
 pub use params::{
     Bar, CccParams, DriveDirection, Friction, Side, FRICTION_JOINTS, FRICTION_JOINT_NAMES,
 };
+mod observer;
 mod twin;
 
+pub use observer::{
+    BiasWatch, Covariance, Diagnostic, Diagnostics, ObserverSettings, TwinObserver, Update,
+};
 pub use twin::{
-    energy_tolerance, Audit, Converter, CoordinateSwitch, Event, EventKind, Failure, Inputs,
-    LinkState, MotorInput, Twin, TwinSettings, TwinSetupError, TwinStepError, DIODE_HORIZON_STEPS,
-    ENERGY_TOL_STEP, JOINTS, JOINT_NAMES, MAX_EVENTS_PER_STEP, MAX_LOCATE_ITER, MAX_RETRIES,
-    SINGULAR_CONDITIONING, SUBSTEPS,
+    energy_tolerance, Audit, Converter, CoordinateSwitch, Correction, Encoder, EncoderResiduals,
+    Event, EventKind, Failure, Inputs, LinkState, Measurement, MotorInput, Twin, TwinSettings,
+    TwinSetupError, TwinStepError, DIODE_HORIZON_STEPS, ENERGY_TOL_STEP, JOINTS, JOINT_NAMES,
+    MAX_EVENTS_PER_STEP, MAX_LOCATE_ITER, MAX_RETRIES, SINGULAR_CONDITIONING, SUBSTEPS,
 };

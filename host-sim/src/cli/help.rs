@@ -225,7 +225,17 @@ The clutch log (CSV: t, event, from, to; the events and modes in host-sim's name
   machine) and names the first pair that differs (the event, the mode before or
   after), and the events missing or extra at the end.
 
---observer (the twin corrected from the encoders) is not built yet and is refused.";
+--observer: the core's observer (an error-state Kalman filter on the crank's angle and
+  speed) steps the twin and corrects it from the log's encoders after every step; the
+  crank's count is then absolute (no offset). The CSV gains
+  crank_innovation crank_sigma   the crank's count measured - predicted, and the
+                standard deviation of the angle's error after the update, counts
+  shaft_innovation   the shaft's motion since the last mode change, measured - twin,
+                counts
+  crank_jump shaft_jump clutch_slip failed_catch load_bias   1 at a step that raised
+                the diagnostic
+  and the summary the innovations' and residuals' RMS and largest (over the run and
+  after its first 20 ms), the corrections' energy and each diagnostic's onsets.";
 
 /// After the options in `host-sim fmu --help`: what the FMU is and how it steps.
 pub const FMU: &str = "\

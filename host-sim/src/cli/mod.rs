@@ -80,7 +80,7 @@ pub enum Command {
     List,
     /// `host-sim run <scenario> [options]`.
     Run(RunOptions),
-    /// `host-sim replay LOG.csv [--params FILE.toml] [--clutch-log FILE] --out FILE`.
+    /// `host-sim replay LOG.csv [--params FILE.toml] [--observer] [--clutch-log FILE] --out FILE`.
     Replay(ReplayOptions),
     /// `host-sim analyze FILE.toml|<scenario>`.
     Analyze(Source),

@@ -404,7 +404,7 @@ pub struct ReplayArgs {
     /// The state CSV with the encoder residuals; the event and switch logs go next to it
     #[arg(long, value_name = "RUN.csv")]
     pub out: String,
-    /// Correct the twin from the log's encoders (not built yet: refused)
+    /// Correct the twin from the log's encoders every step (the core's observer)
     #[arg(long)]
     pub observer: bool,
     /// No summary
@@ -416,12 +416,6 @@ impl ReplayArgs {
     /// The checked options: the logs read and validated, the run file read (it must
     /// describe the converter).
     pub fn options(&self) -> Result<ReplayOptions, UsageError> {
-        if self.observer {
-            return Err(usage_err(
-                "--observer: the observer is not built yet (the core has no observer; \
-                 issue 19's item 3): replay runs open-loop, without --observer",
-            ));
-        }
         let log_path = parse_path("replay", &self.log)?;
         let log = BenchLog::read(&log_path).map_err(|e| usage_err(format!("replay: {e}")))?;
         let params = match self.params.as_deref() {
@@ -449,6 +443,7 @@ impl ReplayArgs {
             params,
             clutch,
             out: parse_path("--out", &self.out)?,
+            observer: self.observer,
             quiet: self.quiet,
         })
     }

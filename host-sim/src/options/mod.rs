@@ -122,6 +122,8 @@ pub struct ReplayOptions {
     pub clutch: Option<(PathBuf, Arc<ClutchLog>)>,
     /// `--out`: the state CSV (its event and switch logs next to it).
     pub out: PathBuf,
+    /// `--observer`: the twin corrected from the log's encoders.
+    pub observer: bool,
     /// No summary.
     pub quiet: bool,
 }

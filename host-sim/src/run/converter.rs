@@ -424,6 +424,10 @@ pub struct Logged {
     pub to: Mode,
 }
 
+/// What takes one step of a twin under its inputs (the twin's own step, or an
+/// observer's).
+pub type StepFn<'a, T> = dyn FnMut(&mut Twin<T>, &Inputs<T>) -> Result<(), TwinStepError> + 'a;
+
 /// What appends a run's own cells to a state row, for the twin's present state.
 pub type ExtraCells<'a, T> = dyn FnMut(&Twin<T>, &mut Vec<Cell<'static, T>>) + 'a;
 
@@ -494,6 +498,19 @@ impl Drive {
         &self,
         twin: &mut Twin<T>,
         inputs: &mut dyn FnMut(u64) -> Inputs<T>,
+        extra: &mut Extra<'_, T>,
+        obs: &mut dyn Observer<T>,
+    ) -> Result<Driven, RunError> {
+        self.run_with(twin, inputs, &mut |t, i| t.step(i), extra, obs)
+    }
+
+    /// [`Drive::run`] with each step taken by `step` (the twin's own, or an observer's
+    /// step of it).
+    pub fn run_with<T: Real>(
+        &self,
+        twin: &mut Twin<T>,
+        inputs: &mut dyn FnMut(u64) -> Inputs<T>,
+        step: &mut StepFn<'_, T>,
         extra: &mut Extra<'_, T>,
         obs: &mut dyn Observer<T>,
     ) -> Result<Driven, RunError> {
@@ -582,7 +599,7 @@ impl Drive {
             progress.tick(twin.time().to_f64());
             let now = inputs(steps);
             let t0 = Instant::now();
-            let r = twin.step(&now);
+            let r = step(twin, &now);
             step_wall += t0.elapsed();
             if let Err(error) = r {
                 // An end at a singularity of the mechanism (S1's diode rods in line, or
@@ -659,6 +676,7 @@ impl Driven {
                 kinetic: a.kinetic.to_f64(),
                 potential: a.potential.to_f64(),
                 initial: a.initial.to_f64(),
+                correction: a.correction.to_f64(),
             },
             mode: twin.mode(),
             coords: twin.coordinates(),

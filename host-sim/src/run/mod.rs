@@ -11,6 +11,7 @@ pub mod converter;
 pub mod fmu;
 pub mod interrupt;
 pub mod mechanism;
+pub mod observed;
 pub mod progress;
 pub mod replay;
 pub mod switching;

@@ -7,22 +7,32 @@
 //! gives each encoder's residual RMS and largest, and, with the machine's clutch log,
 //! its events paired in order with the twin's.
 //!
+//! With `--observer` ([`super::observed`]) the twin is stepped by the core's
+//! [`TwinObserver`] with the log's encoders as its measurements (each step's, the
+//! sample it ends at) and corrected by them; the crank's count is then the bench's law
+//! with no offset (the measurement is absolute), and the rows gain the innovations and
+//! diagnostics.
+//!
 //! The encoder law ([`encoder_counts`]): the crank's count is `floor(θ1 / (2π/4096))`
 //! of the twin's crank angle plus an offset that makes the first row's count the
 //! log's (0 when the run file's initial crank angle is the machine's); the shaft's is
 //! `floor(φ / (2π/4096))` of the shaft's angle φ turned in the drive direction from 0.
 
 use super::converter::{self, new_twin, CccSummary, Drive, Extra, Logged};
+use super::observed::{self, ObservedSummary, OBSERVER_COLUMNS};
 use super::{overwritten, to_files};
 use crate::error::{report_run_error, usage_err, Fig, RunError};
 use crate::model::bench::{encoder_counts, BenchLog, ClutchEvent, ClutchLog, COUNTS_PER_TURN};
 use crate::model::scenarios::CccScenario;
 use crate::options::{precision, ReplayOptions};
 use crate::output::{Cell, Observer};
+use std::cell::Cell as Shared;
 use std::fmt;
 use std::io::Write;
 use std::path::{Path, PathBuf};
-use structomat::ccc::{DriveDirection, EventKind, Inputs, MotorInput, Twin};
+use structomat::ccc::{
+    DriveDirection, EventKind, Inputs, MotorInput, ObserverSettings, Twin, TwinObserver, Update,
+};
 use structomat::Real;
 
 /// The columns a replay appends to the run's state row: per encoder, the count
@@ -48,7 +58,7 @@ pub struct Residuals {
 }
 
 impl Residuals {
-    fn add(&mut self, residual: i64, time: f64) {
+    pub(crate) fn add(&mut self, residual: i64, time: f64) {
         self.samples += 1;
         self.sum_squares += (residual as f64).powi(2);
         if residual.unsigned_abs() > self.largest.0.unsigned_abs() || self.samples == 1 {
@@ -294,6 +304,8 @@ pub struct ReplaySummary {
     pub shaft: Residuals,
     /// The machine's events paired with the twin's, when a clutch log was given.
     pub matching: Option<Matching>,
+    /// What the observer did, when it was on.
+    pub observed: Option<ObservedSummary>,
 }
 
 impl ReplaySummary {
@@ -307,12 +319,17 @@ impl fmt::Display for ReplaySummary {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         writeln!(
             f,
-            "replay    {}: {} samples at h = {} s, t = 0 .. {} s, open loop (no observer), on \
-             the converter of {} ({})",
+            "replay    {}: {} samples at h = {} s, t = 0 .. {} s, {}, on the converter of {} \
+             ({})",
             self.log,
             self.samples,
             self.run.h,
             Fig(self.run.t_end),
+            if self.observed.is_some() {
+                "with the observer (corrected from the encoders)"
+            } else {
+                "open loop (no observer)"
+            },
             self.run.scenario,
             self.run.precision
         )?;
@@ -324,6 +341,9 @@ impl fmt::Display for ReplaySummary {
             self.crank, self.crank_offset
         )?;
         write!(f, "shaft     {} (drive direction positive)", self.shaft)?;
+        if let Some(o) = &self.observed {
+            write!(f, "\n{}", o.to_string().trim_end())?;
+        }
         if let Some(m) = &self.matching {
             write!(f, "\n{}", m.to_string().trim_end())?;
         }
@@ -341,6 +361,20 @@ pub fn simulate<T: Real>(
     clutch: Option<&ClutchLog>,
     obs: &mut dyn Observer<T>,
 ) -> Result<ReplaySummary, RunError> {
+    simulate_with(name, settings, log, clutch, None, obs)
+}
+
+/// [`simulate`], with `observer` the twin stepped by a [`TwinObserver`] of those
+/// settings and corrected from the log's encoders, the rows with [`OBSERVER_COLUMNS`]
+/// too.
+pub fn simulate_with<T: Real>(
+    name: &str,
+    settings: CccScenario,
+    log: &BenchLog,
+    clutch: Option<&ClutchLog>,
+    observer: Option<ObserverSettings<T>>,
+    obs: &mut dyn Observer<T>,
+) -> Result<ReplaySummary, RunError> {
     let n = log.len().saturating_sub(1);
     let h = T::c(log.period());
     if !(h.finite() && h > T::zero()) {
@@ -351,17 +385,42 @@ pub fn simulate<T: Real>(
             precision::<T>()
         )));
     }
+    let start = Inputs {
+        motor: MotorInput::Torque(T::c(log.motor[0])),
+        load: T::c(log.load[0]),
+        measured: None,
+    };
+    // Step k + 1 ends at sample k + 1: what the encoders read there.
     let inputs = |k: usize| Inputs {
         motor: MotorInput::Torque(T::c(log.motor[k])),
         load: T::c(log.load[k]),
-        measured: None,
+        measured: observer.and_then(|_| observed::measurement(log, k + 1)),
     };
-    let mut twin = new_twin(name, &settings, h, inputs(0))?;
-    let law = EncoderLaw::new(&twin, log.crank[0]);
+    let mut settings = settings;
+    if observer.is_some() {
+        // The filter's state starts from the first measurement, as a Kalman filter's
+        // does: the crank at the middle of the log's first count (the rest of the
+        // initial state, the swing link's angle and the speeds, is the run file's).
+        let first = (log.crank[0] as f64 + 0.5) * std::f64::consts::TAU / COUNTS_PER_TURN as f64;
+        settings.converter.crank_deg = first.to_degrees();
+    }
+    let mut twin = new_twin(name, &settings, h, start)?;
+    let mut law = EncoderLaw::new(&twin, log.crank[0]);
+    if observer.is_some() {
+        law.crank_offset = 0;
+    }
     let mut crank = Residuals::default();
     let mut shaft = Residuals::default();
+    let mut filter = observer.map(TwinObserver::new);
+    // The last step's update and the crank angle's variance after it, rad².
+    let update: Shared<Option<(Update<T>, T)>> = Shared::new(None);
+    let mut watch = observer.map(|_| ObservedSummary::default());
+    let mut columns = RESIDUAL_COLUMNS.map(String::from).to_vec();
+    if observer.is_some() {
+        columns.extend(OBSERVER_COLUMNS.map(String::from));
+    }
     let mut extra = Extra {
-        columns: RESIDUAL_COLUMNS.map(String::from).to_vec(),
+        columns,
         // A row at every state (`every` is 1): each sample's residuals counted once.
         cells: Box::new(|twin: &Twin<T>, cells: &mut Vec<Cell<'static, T>>| {
             let k = usize::try_from(twin.steps()).unwrap_or(usize::MAX);
@@ -374,6 +433,16 @@ pub fn simulate<T: Real>(
             crank.add(mc - tc, time);
             shaft.add(ms - ts, time);
             cells.extend([mc, tc, mc - tc, ms, ts, ms - ts].map(|c| Cell::Num(T::c(c as f64))));
+            if let Some(w) = watch.as_mut() {
+                let u = update.get();
+                w.add(
+                    twin,
+                    u.map(|u| u.0),
+                    u.map_or(T::zero(), |u| u.1),
+                    mc - tc,
+                    cells,
+                );
+            }
         }),
     };
     let drive = Drive {
@@ -382,9 +451,18 @@ pub fn simulate<T: Real>(
         t_end: log.duration(),
         quiet: true,
     };
-    let driven = drive.run(
+    let mut step = |twin: &mut Twin<T>, now: &Inputs<T>| match filter.as_mut() {
+        None => twin.step(now),
+        Some(f) => {
+            let up = f.step(twin, now)?;
+            update.set(Some((up, f.covariance().angle)));
+            Ok(())
+        }
+    };
+    let driven = drive.run_with(
         &mut twin,
         &mut |k| inputs(usize::try_from(k).unwrap_or(0)),
+        &mut step,
         &mut extra,
         obs,
     )?;
@@ -398,6 +476,7 @@ pub fn simulate<T: Real>(
         crank,
         shaft,
         matching,
+        observed: watch,
     })
 }
 
@@ -433,8 +512,9 @@ pub fn run(opts: &ReplayOptions) -> Result<ReplaySummary, RunError> {
         ))));
     }
     let clutch = opts.clutch.as_ref().map(|(_, c)| &**c);
+    let observer = opts.observer.then(ObserverSettings::reference);
     let mut summary = to_files(&targets, |mut csv| {
-        simulate::<f64>(&params, settings, &opts.log.1, clutch, &mut csv)
+        simulate_with::<f64>(&params, settings, &opts.log.1, clutch, observer, &mut csv)
     })?;
     summary.run.logs = Some((
         targets[1].display().to_string(),

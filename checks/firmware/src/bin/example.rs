@@ -1,8 +1,9 @@
 //! A firmware example: the twin in a 1 kHz control loop on an emulated Cortex-M board.
 //!
 //! Each period the loop reads the crank's incremental encoder (counts) and the motor's
-//! torque sensor, steps the twin with that torque and the measured crank angle and speed,
-//! and reports the mode and the residuals (twin minus measurement) every 50 ms. The
+//! torque sensor, steps the twin with that torque and the crank encoder's count, and
+//! reports the mode and the residuals (twin minus measurement: the crank's angle, and its
+//! speed against the count's rate) every 50 ms. The
 //! machine itself is simulated here too: a second twin, driven by S2's 12 N·m motor
 //! against a load 2 % heavier than the model's, read through a 4096-count encoder
 //! and a torque sensor with a ±0.02 N·m deterministic noise.
@@ -19,7 +20,7 @@
 use core::f64::consts::TAU;
 use core::mem::MaybeUninit;
 use cortex_m_rt::entry;
-use structomat::ccc::{CccParams, Inputs, MotorInput, Twin, TwinSettings};
+use structomat::ccc::{CccParams, Inputs, Measurement, MotorInput, Twin, TwinSettings};
 use structomat::motor::Motor;
 use structomat::Real;
 
@@ -136,13 +137,17 @@ fn main() -> ! {
         }
         let count = machine.encoder();
         let torque = machine.torque_sensor();
-        let angle = zero + R::c(f64::from(count) / COUNTS_PER_REV * TAU);
         let speed = R::c(f64::from(count - last_count) / COUNTS_PER_REV * TAU / PERIOD);
         last_count = count;
         let inputs = Inputs {
             motor: MotorInput::Torque(torque),
             load: R::c(LOAD),
-            measured: Some((angle, speed)),
+            // The machine's encoder rounds: count k's cell starts half a count below.
+            measured: Some(Measurement::crank(
+                i64::from(count),
+                COUNTS_PER_REV as u32,
+                zero - R::c(TAU / COUNTS_PER_REV / 2.0),
+            )),
         };
 
         clock.mark();
@@ -158,9 +163,11 @@ fn main() -> ! {
             ));
         }
         if (k + 1) % 50 == 0 || !twin.events().is_empty() {
-            let (da, dw) = twin
+            let da = twin
                 .measurement_residual()
-                .unwrap_or((R::c(0.0), R::c(0.0)));
+                .and_then(|r| r.crank)
+                .unwrap_or(R::c(0.0));
+            let dw = twin.link(1).omega - speed;
             out.line(format_args!(
                 "t={:.3} {}/{} count {count} torque {:.3} residual {:+.2e} rad {:+.2e} rad/s step {instructions} instructions",
                 twin.time().to_f64(),

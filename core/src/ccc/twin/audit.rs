@@ -8,8 +8,9 @@ use super::{shaft_speed, Twin, Work};
 use crate::error::{GroupFault, StepError};
 use crate::scalar::{perp, rotate_cs, Real, Vec2};
 
-/// The energy audit (SPEC 3): `motor work = Δ(kinetic + potential) + load work + impact
-/// losses`, each term in J since the start.
+/// The energy audit (SPEC 3): `motor work + corrections = Δ(kinetic + potential) + load
+/// work + impact losses`, each term in J since the start (`corrections`: the energy an
+/// observer's corrections of the state put in, 0 without one).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Audit<T> {
     /// Work of the motor on the crank.
@@ -24,15 +25,25 @@ pub struct Audit<T> {
     pub potential: T,
     /// Kinetic plus potential energy at the start.
     pub initial: T,
+    /// The energy the state's corrections ([`Twin::correct_crank`]) put into it, net of
+    /// the impact losses of the mode changes they made.
+    pub correction: T,
 }
 
 impl<T: Real> Audit<T> {
-    /// `motor work - Δ(kinetic + potential) - load work - impact losses`, J.
+    /// `motor work + corrections - Δ(kinetic + potential) - load work - impact losses`,
+    /// J.
     pub fn residual(&self) -> T {
-        self.motor_work
+        let r = self.motor_work
             - (self.kinetic + self.potential - self.initial)
             - self.load_work
-            - self.impact_loss
+            - self.impact_loss;
+        // Without corrections the residual's bits are the uncorrected twin's (a -0 too).
+        if self.correction == T::zero() {
+            r
+        } else {
+            r + self.correction
+        }
     }
 }
 
@@ -79,6 +90,7 @@ pub(super) fn audit_finite<T: Real>(a: &Audit<T>, t: T) -> Result<(), TwinStepEr
         a.kinetic,
         a.potential,
         a.initial,
+        a.correction,
         a.residual(),
     ];
     if terms.iter().all(|x| x.finite()) {
@@ -104,6 +116,7 @@ impl<T: Real> Twin<T> {
             kinetic,
             potential,
             initial: self.audit.initial,
+            correction: self.audit.correction,
         }
     }
 

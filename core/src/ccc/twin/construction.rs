@@ -10,7 +10,7 @@ use super::coordinates::best_slot;
 use super::error::{TwinSetupError, TwinStepError};
 use super::evaluate::TorqueSource;
 use super::guards::{EventKind, Guards};
-use super::inputs::{check_inputs, Inputs};
+use super::inputs::{check_inputs, Held, Inputs};
 use super::settings::{check_settings, TwinSettings};
 use super::slot::{LinkState, Slot};
 use super::slots::Slots;
@@ -58,7 +58,7 @@ impl<T: Real> Twin<T> {
             y: SVector::zeros(),
             t: T::zero(),
             steps: 0,
-            inputs,
+            inputs: Held::of(&inputs),
             links: [LinkState::default(); 9],
             shaft_angle: T::zero(),
             c: [T::zero(); 2],
@@ -145,7 +145,7 @@ impl<T: Real> Twin<T> {
             addr_of_mut!((*p).y).write(SVector::zeros());
             addr_of_mut!((*p).t).write(T::zero());
             addr_of_mut!((*p).steps).write(0);
-            addr_of_mut!((*p).inputs).write(inputs);
+            addr_of_mut!((*p).inputs).write(Held::of(&inputs));
             addr_of_mut!((*p).links).write([LinkState::default(); 9]);
             addr_of_mut!((*p).shaft_angle).write(T::zero());
             addr_of_mut!((*p).c).write([T::zero(); 2]);

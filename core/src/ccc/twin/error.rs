@@ -212,6 +212,10 @@ impl fmt::Display for TwinStepError {
             TwinStepError::BadInput { time, field, value } => {
                 let rule = if *field == "load" {
                     "must be finite and ≥ 0"
+                } else if field.contains("resolution") {
+                    "must be > 0"
+                } else if field.contains("jump") {
+                    "must be under half a turn (the direction of a larger one is unknown)"
                 } else {
                     "must be finite"
                 };

@@ -1,4 +1,4 @@
-//! What the twin is given each step (the motor, the load, a measurement) and the
+//! What the twin is given each step (the motor, the load, the encoders' counts) and the
 //! check that refuses a bad one by name.
 
 use super::error::TwinStepError;
@@ -32,13 +32,131 @@ pub struct Inputs<T: Real> {
     pub motor: MotorInput<T>,
     /// The load's resistive torque on the shaft T_r ≥ 0, N·m.
     pub load: T,
-    /// A measured crank angle (rad) and speed (rad/s) to compare against.
-    pub measured: Option<(T, T)>,
+    /// What the bench's encoders read at the step's end, to compare the twin against
+    /// (and, with an [`TwinObserver`](crate::ccc::TwinObserver), to correct it by).
+    pub measured: Option<Measurement<T>>,
 }
 
-/// Whether two steps' inputs are the same, bit for bit (a motor law is taken to be
+/// An incremental encoder's reading: its count and its resolution.
+///
+/// The angle it stands for is `zero + (counts + ½)·2π/per_turn`, rad: the middle of the
+/// count's cell for an encoder that counts `floor((angle - zero)/(2π/per_turn))` (the
+/// bench's law), whose error is then uniform over the cell, variance `(2π/per_turn)²/12`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Encoder<T> {
+    /// The count.
+    pub counts: i64,
+    /// Counts per turn (> 0).
+    pub per_turn: u32,
+    /// The angle at the start of count 0's cell, rad, in the measured angle's sense.
+    pub zero: T,
+}
+
+impl<T: Real> Encoder<T> {
+    /// One count, rad (`per_turn` > 0).
+    pub fn resolution(&self) -> T {
+        T::c(core::f64::consts::TAU / f64::from(self.per_turn.max(1)))
+    }
+
+    /// The angle the count stands for (its cell's middle), rad.
+    pub fn angle(&self) -> T {
+        self.zero + T::c(self.counts as f64 + 0.5) * self.resolution()
+    }
+}
+
+/// What the bench measures at a step's end: the crank's encoder (θ1, SPEC's q1, CCW,
+/// unwrapped), the output shaft's (its angle turned in the drive direction), and
+/// optionally the rocker's (link 3's θ, CCW).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Measurement<T> {
+    /// The crank's encoder.
+    pub crank: Option<Encoder<T>>,
+    /// The shaft's encoder, positive in the drive direction.
+    pub shaft: Option<Encoder<T>>,
+    /// The rocker's encoder.
+    pub rocker: Option<Encoder<T>>,
+}
+
+impl<T: Real> Measurement<T> {
+    /// The crank's encoder alone.
+    pub fn crank(counts: i64, per_turn: u32, zero: T) -> Self {
+        Measurement {
+            crank: Some(Encoder {
+                counts,
+                per_turn,
+                zero,
+            }),
+            shaft: None,
+            rocker: None,
+        }
+    }
+
+    /// The encoders, with the fields a bad reading of each is named by: its
+    /// resolution, its zero.
+    fn fields(&self) -> [(Option<Encoder<T>>, [&'static str; 2]); 3] {
+        [
+            (
+                self.crank,
+                [
+                    "crank encoder resolution (counts per turn)",
+                    "crank encoder zero",
+                ],
+            ),
+            (
+                self.shaft,
+                [
+                    "shaft encoder resolution (counts per turn)",
+                    "shaft encoder zero",
+                ],
+            ),
+            (
+                self.rocker,
+                [
+                    "rocker encoder resolution (counts per turn)",
+                    "rocker encoder zero",
+                ],
+            ),
+        ]
+    }
+}
+
+/// What the twin keeps of the last step's inputs: the motor and the load, and the
+/// encoders' angles ([`Encoder::angle`], rad: crank, shaft, rocker) for
+/// [`Twin::measurement_residual`](super::Twin::measurement_residual). (Not the
+/// [`Measurement`] itself: the f32 twin's 32 KiB budget has room for three angles, not
+/// three encoders.)
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Held<T: Real> {
+    pub motor: MotorInput<T>,
+    pub load: T,
+    pub angles: Option<[Option<T>; 3]>,
+}
+
+impl<T: Real> Held<T> {
+    pub(super) fn of(i: &Inputs<T>) -> Self {
+        let angle = |e: Option<Encoder<T>>| e.map(|e| e.angle());
+        Held {
+            motor: i.motor,
+            load: i.load,
+            angles: i
+                .measured
+                .map(|m| [angle(m.crank), angle(m.shaft), angle(m.rocker)]),
+        }
+    }
+
+    /// The inputs to evaluate the models with (the encoders play no part there).
+    pub(super) fn inputs(&self) -> Inputs<T> {
+        Inputs {
+            motor: self.motor,
+            load: self.load,
+            measured: None,
+        }
+    }
+}
+
+/// Whether a step's inputs are the last step's, bit for bit (a motor law is taken to be
 /// the same law).
-pub(super) fn same_inputs<T: Real>(a: &Inputs<T>, b: &Inputs<T>) -> bool {
+pub(super) fn same_inputs<T: Real>(a: &Held<T>, b: &Inputs<T>) -> bool {
     let motor = match (a.motor, b.motor) {
         (MotorInput::Torque(x), MotorInput::Torque(y)) => same_bits(x, y),
         (MotorInput::Law(_), MotorInput::Law(_)) => true,
@@ -65,7 +183,8 @@ fn law_fault<T: Real>(m: &Motor<T>) -> Option<(&'static str, T)> {
 }
 
 /// The per-step inputs are valid, or the error that names the first that is not
-/// (`time`: the twin's, s).
+/// (`time`: the twin's, s). A count's jump between steps is the observer's to judge
+/// ([`TwinObserver`](crate::ccc::TwinObserver)): the twin keeps no count.
 pub(super) fn check_inputs<T: Real>(inputs: &Inputs<T>, time: T) -> Result<(), TwinStepError> {
     let bad = |field, value: T| {
         Err(TwinStepError::BadInput {
@@ -88,12 +207,16 @@ pub(super) fn check_inputs<T: Real>(inputs: &Inputs<T>, time: T) -> Result<(), T
         }
         _ => {}
     }
-    if let Some((a, w)) = inputs.measured {
-        if !a.finite() {
-            return bad("measured crank angle", a);
+    let Some(m) = inputs.measured else {
+        return Ok(());
+    };
+    for (e, [resolution, zero]) in m.fields() {
+        let Some(e) = e else { continue };
+        if e.per_turn == 0 {
+            return bad(resolution, T::zero());
         }
-        if !w.finite() {
-            return bad("measured crank speed", w);
+        if !e.zero.finite() {
+            return bad(zero, e.zero);
         }
     }
     Ok(())

@@ -10,7 +10,8 @@
 //! location inside a step (`locate.rs`); the mode choice at an event (`choice.rs`),
 //! each candidate built and judged (`candidate.rs`) by the consistency conditions
 //! (`consistency.rs`) after the plastic impact (`impact.rs`); coordinate choice and
-//! switching (`coordinates.rs`); one mode's model and workspace (`slot.rs`), the three
+//! switching (`coordinates.rs`); a correction of the state in crank terms, an
+//! observer's update (`correction.rs`); one mode's model and workspace (`slot.rs`), the three
 //! working slots (`slots.rs`) and their staged evaluation (`evaluate.rs`); the energy
 //! audit (`audit.rs`).
 //!
@@ -24,6 +25,7 @@ mod choice;
 mod consistency;
 mod construction;
 mod coordinates;
+mod correction;
 mod error;
 mod evaluate;
 mod guards;
@@ -38,9 +40,11 @@ mod slots;
 pub use audit::Audit;
 pub use capacity::Converter;
 pub use coordinates::CoordinateSwitch;
+pub use correction::Correction;
 pub use error::{Failure, TwinSetupError, TwinStepError};
 pub use guards::{Event, EventKind};
-pub use inputs::{Inputs, MotorInput};
+pub use inputs::{Encoder, Inputs, Measurement, MotorInput};
+pub use outputs::EncoderResiduals;
 pub use settings::{
     energy_tolerance, TwinSettings, DIODE_HORIZON_STEPS, ENERGY_TOL_STEP, MAX_EVENTS_PER_STEP,
     MAX_LOCATE_ITER, MAX_RETRIES, SINGULAR_CONDITIONING, SUBSTEPS,
@@ -56,7 +60,7 @@ use crate::scalar::{Real, Vec2};
 use crate::workspace::WarmStart;
 use evaluate::{Stage, TorqueSource, Torques};
 use guards::Guards;
-use inputs::{check_inputs, same_inputs};
+use inputs::{check_inputs, same_inputs, Held};
 use nalgebra::SVector;
 use settings::{RETRY_SUBSTEPS, RUNG_SAFETY};
 use slot::{unwrap_near, Equations, Slot, QD, STATE};
@@ -84,7 +88,7 @@ use slots::Slots;
 /// a step); no indexing on the step path can panic, and a failed step returns an error
 /// and keeps the last good state.
 ///
-/// **Size.** `size_of::<Twin<f64>>()` is 63 528 B (62.0 KiB), `Twin<f32>` 32 744 B
+/// **Size.** `size_of::<Twin<f64>>()` is 63 552 B (62.1 KiB), `Twin<f32>` 32 752 B
 /// (32.0 KiB) on x86_64: three slots, each a model and a workspace sized for the
 /// converter; the mode choice builds its reference model in the one it leaves free
 /// (the core asserts the budgets at compile time: 64 KiB and 32 KiB). A step's
@@ -119,13 +123,14 @@ use slots::Slots;
 /// The core of the repository's `checks/firmware/src/bin/example.rs` (a `no_std` binary
 /// that runs it on an emulated Cortex-M4F): the twin in a `static`, built in place, and
 /// a 1 kHz loop that reads the crank's encoder and the motor's torque sensor, steps the
-/// twin with them and reads its mode and the measurement residual. The board's
+/// twin with them and reads its mode and the measurement residual (with a
+/// [`TwinObserver`](crate::ccc::TwinObserver) stepping it, the twin is also corrected
+/// by the encoder). The board's
 /// functions are stubs here.
 ///
 /// ```no_run
-/// use core::f32::consts::TAU;
 /// use core::mem::MaybeUninit;
-/// use structomat::ccc::{CccParams, Inputs, MotorInput, Twin, TwinSettings};
+/// use structomat::ccc::{CccParams, Inputs, Measurement, MotorInput, Twin, TwinSettings};
 ///
 /// /// The twin's home: a static in `.bss`, never the stack. (cortex-m-rt's `#[entry]`
 /// /// hands `main` its `static mut`s as `&'static mut`: the example does that.)
@@ -134,13 +139,13 @@ use slots::Slots;
 /// /// The loop's period, s: the twin's step.
 /// const PERIOD: f32 = 1e-3;
 /// /// Encoder counts per crank revolution.
-/// const COUNTS_PER_REV: f32 = 4096.0;
+/// const COUNTS_PER_REV: u32 = 4096;
 /// /// The shaft's load, N·m.
 /// const LOAD: f32 = 800.0;
 /// # fn wait_for_tick() {}
-/// # fn read_encoder() -> i32 { 0 }
+/// # fn read_encoder() -> i64 { 0 }
 /// # fn read_torque_sensor() -> f32 { 12.0 }
-/// # fn report(_mode: &str, _angle_residual: f32, _speed_residual: f32) {}
+/// # fn report(_mode: &str, _angle_residual: f32) {}
 /// # fn report_refused(_e: &structomat::ccc::TwinStepError) {}
 ///
 /// fn main() {
@@ -151,25 +156,21 @@ use slots::Slots;
 ///     let Ok(twin) = Twin::new_in(place, CccParams::reference(), settings, start) else {
 ///         panic!("the converter does not assemble");
 ///     };
+///     // The encoder's count 0 is the crank's angle at the start.
 ///     let zero = twin.link(1).theta;
-///     let mut last = read_encoder();
 ///     loop {
 ///         wait_for_tick();
-///         let count = read_encoder();
-///         let angle = zero + count as f32 / COUNTS_PER_REV * TAU;
-///         let speed = (count - last) as f32 / COUNTS_PER_REV * TAU / PERIOD;
-///         last = count;
 ///         let inputs = Inputs {
 ///             motor: MotorInput::Torque(read_torque_sensor()),
 ///             load: LOAD,
-///             measured: Some((angle, speed)),
+///             measured: Some(Measurement::crank(read_encoder(), COUNTS_PER_REV, zero)),
 ///         };
 ///         // A refused step (a bad reading) keeps the twin's last good state.
 ///         if let Err(e) = twin.step(&inputs) {
 ///             report_refused(&e);
 ///         }
-///         let (da, dw) = twin.measurement_residual().unwrap_or((0.0, 0.0));
-///         report(twin.mode().name(), da, dw);
+///         let da = twin.measurement_residual().and_then(|r| r.crank).unwrap_or(0.0);
+///         report(twin.mode().name(), da);
 ///     }
 /// }
 /// ```
@@ -184,7 +185,8 @@ pub struct Twin<T: Real> {
     y: SVector<T, STATE>,
     t: T,
     steps: u64,
-    inputs: Inputs<T>,
+    /// The last step's motor, load and encoder angles.
+    inputs: Held<T>,
     links: [LinkState<T>; 9],
     shaft_angle: T,
     c: [T; 2],
@@ -352,7 +354,7 @@ impl<T: Real> Twin<T> {
         // audit's (the same bits, a -0 included).
         self.shaft_angle += T::zero() + T::zero();
         self.audit.impact_loss += T::zero();
-        self.inputs = *inputs;
+        self.inputs = Held::of(inputs);
         Ok(())
     }
 
@@ -388,7 +390,7 @@ impl<T: Real> Twin<T> {
                 self.y = w.y;
                 self.steps += 1;
                 self.commit(&w, audit, links);
-                self.inputs = *inputs;
+                self.inputs = Held::of(inputs);
                 self.at_rest = w.at_rest;
                 Ok(())
             }

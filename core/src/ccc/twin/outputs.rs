@@ -2,7 +2,7 @@
 //! physical state, the shaft, clutch torques, joint reactions, the audit and the logs
 //! of the last step.
 
-use super::super::build::CRANK;
+use super::super::build::{CRANK, ROCKER};
 use super::super::mode::{Coordinates, Mode};
 use super::super::params::CccParams;
 use super::audit::Audit;
@@ -11,6 +11,17 @@ use super::guards::Event;
 use super::slot::{LinkState, QD};
 use super::{shaft_speed, Twin};
 use crate::scalar::{Real, Vec2};
+
+/// The twin's angles less the measured ones, rad, of each encoder measured.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EncoderResiduals<T> {
+    /// The crank's θ1.
+    pub crank: Option<T>,
+    /// The shaft's angle in the drive direction.
+    pub shaft: Option<T>,
+    /// The rocker's θ.
+    pub rocker: Option<T>,
+}
 
 impl<T: Real> Twin<T> {
     /// Time, s.
@@ -57,6 +68,12 @@ impl<T: Real> Twin<T> {
             .as_slice()
             .get(QD..QD + self.slots.cur().map.dof.min(2))
             .unwrap_or(&[])
+    }
+
+    /// The crank's transmission `∂θ1/∂q` (= `∂ω1/∂q̇`) over the current coordinates
+    /// (`[..dof]`): 1 where the crank is a coordinate, 0 at the crank's reversals.
+    pub fn crank_transmission(&self) -> [T; 2] {
+        self.slots.cur().omega_row(CRANK)
     }
 
     /// Their accelerations, rad/s².
@@ -117,12 +134,22 @@ impl<T: Real> Twin<T> {
         self.audit
     }
 
-    /// Crank angle and speed minus the measured ones given with the last step's inputs.
-    pub fn measurement_residual(&self) -> Option<(T, T)> {
-        let c = self.link(CRANK);
-        self.inputs
-            .measured
-            .map(|(a, w)| (c.theta - a, c.omega - w))
+    /// The twin's angles less the measured ones of the last step's inputs (each
+    /// encoder's angle, [`Encoder::angle`](super::Encoder::angle)), rad: the crank's
+    /// θ1, the shaft's angle in the drive direction, the rocker's θ.
+    pub fn measurement_residual(&self) -> Option<EncoderResiduals<T>> {
+        let [crank, shaft, rocker] = self.inputs.angles?;
+        let of = |a: Option<T>, twin: T| a.map(|a| twin - a);
+        Some(EncoderResiduals {
+            crank: of(crank, self.link(CRANK).theta),
+            shaft: of(shaft, self.drive * self.shaft_angle),
+            rocker: of(rocker, self.link(ROCKER).theta),
+        })
+    }
+
+    /// The shaft's angle turned in the drive direction since the start, rad.
+    pub fn shaft_drive_angle(&self) -> T {
+        self.drive * self.shaft_angle
     }
 
     /// The mode changes of the last step (or of the setup).

@@ -164,7 +164,7 @@ impl<T: Real> Twin<T> {
         let w = self.work_from_state();
         // It evaluated at this very state before: this cannot fail, and if it did the
         // workspace would merely hold the failed evaluation.
-        let inputs = self.inputs;
+        let inputs = self.inputs.inputs();
         let _ = self.restart_at(&w, &inputs);
     }
 }

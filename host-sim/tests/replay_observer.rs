@@ -1,0 +1,273 @@
+//! `host-sim replay --observer`: the prototype's bench log replayed with the core's
+//! observer correcting the twin from the log's encoders.
+//!
+//! Oracles: the machine's own records (its encoder counts, its clutch log
+//! `tests/data/bench1_clutch_log.csv`), issue 19's targets (every figure named "issue"
+//! is the issue's, not computed here), a fault injected into the log at a known
+//! instant, and a log the twin wrote itself (no model error).
+
+use host_sim::cli::{parse_args, Command};
+use host_sim::plot::Table;
+use host_sim::run::replay::{self, ReplaySummary};
+use std::f64::consts::TAU;
+use std::path::PathBuf;
+
+mod common;
+use common::{run, TempDir};
+
+fn data(name: &str) -> String {
+    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data")
+        .join(name);
+    p.to_str().expect("utf-8 path").to_string()
+}
+
+fn replay_of(args: &[&str]) -> ReplaySummary {
+    let cmd = parse_args([&["replay"][..], args].concat()).unwrap_or_else(|e| panic!("{e:?}"));
+    let Command::Replay(opts) = cmd else {
+        panic!("not a replay: {cmd:?}")
+    };
+    replay::run(&opts).unwrap_or_else(|e| panic!("replay: {e}"))
+}
+
+/// ccc-s2's run file (SPEC's nominal machine) with the initial crank angle `deg`.
+fn spec_from(dir: &TempDir, deg: f64) -> String {
+    let text = host_sim::ScenarioId::CccS2
+        .file_text()
+        .replace("crank_deg = 105.0", &format!("crank_deg = {deg:.1}"));
+    assert!(text.contains(&format!("crank_deg = {deg:.1}")));
+    let path = dir.join("spec.toml");
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+/// bench1 with `edit(t, row)` applied to each data row's cells.
+fn edited(dir: &TempDir, name: &str, edit: impl Fn(f64, &mut Vec<String>)) -> String {
+    let text = std::fs::read_to_string(data("bench1.csv")).unwrap();
+    let mut lines = text.lines();
+    let mut out = format!("{}\n", lines.next().unwrap());
+    for l in lines {
+        let mut c: Vec<String> = l.split(',').map(str::to_string).collect();
+        let t: f64 = c[0].parse().unwrap();
+        edit(t, &mut c);
+        out.push_str(&format!("{}\n", c.join(",")));
+    }
+    let path = dir.join(name);
+    std::fs::write(&path, out).unwrap();
+    path
+}
+
+/// Issue 19: "the observer with SPEC's nominal parameters (not identified), from a
+/// crank angle 5° off: crank residual RMS ≤ 1 count after the first 20 ms, every
+/// clutch event within 1 ms". The filter starts from the first count (as a Kalman
+/// filter's state does from its first measurement). Measured, and NOT met in full (README, "The observer"):
+/// the machine's 21 events in the machine's sequence (open loop the sequences part at
+/// the 14th pair), 17 of them within 1 ms of the clutch log (the first release is
+/// 3.9 ms late, the jam 21.7 ms early: torques of the nominal parameters, which a state
+/// correction does not change), the crank's residual RMS 7.5 counts after 20 ms (82 at
+/// the crank's reversal at 0.49 s, where the crank's angle does not observe the state).
+/// The bounds below are those measurements' (regression values), the sequence the
+/// clutch log's; the columns in the CSV; the summary's lines.
+#[test]
+fn bench1_observed_from_5_degrees_off_follows_the_machine_s_sequence() {
+    let dir = TempDir::new("observe-bench1");
+    let params = spec_from(&dir, 110.0);
+    let out = dir.join("b1.csv");
+    let (log, clutch) = (data("bench1.csv"), data("bench1_clutch_log.csv"));
+    let s = replay_of(&[
+        &log,
+        "--params",
+        &params,
+        "--observer",
+        "--clutch-log",
+        &clutch,
+        "--out",
+        &out,
+    ]);
+    let o = s.observed.as_ref().expect("the observer's summary");
+    // Regression values (measured 3.48 and 3.78 counts): the issue's target is 1.
+    assert!(o.residual_settled.rms() <= 4.0, "{o}");
+    assert!(o.innovation_settled.rms() <= 4.0, "{o}");
+    let m = s.matching.as_ref().expect("a clutch log");
+    assert_eq!(m.counts(), (21, 21), "{m}");
+    assert_eq!(m.first_mismatch(), None, "{m}");
+    let within = m
+        .pairs
+        .iter()
+        .filter(|p| p.dt().unwrap().abs() <= 1e-3)
+        .count();
+    // Regression value (measured 16): the issue's target is all 21.
+    assert!(within >= 16, "{within} of 21 within 1 ms: {m}");
+    assert_eq!(o.first("clutch-slip"), None, "{o}");
+    assert_eq!(o.first("failed-catch"), None, "{o}");
+    // Open loop from the same start the sequences part (issue: at 0.33 s from 105°).
+    let open = replay_of(&[
+        &log,
+        "--params",
+        &params,
+        "--clutch-log",
+        &clutch,
+        "--out",
+        &dir.join("open.csv"),
+    ]);
+    assert!(open.matching.unwrap().first_mismatch().is_some());
+
+    let table = Table::from_csv(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    assert_eq!(table.len(), 1001);
+    let nu = table.column("crank_innovation").unwrap();
+    let late: Vec<f64> = nu.iter().skip(21).copied().collect();
+    let rms = (late.iter().map(|x| x * x).sum::<f64>() / late.len() as f64).sqrt();
+    assert!((rms - o.innovation_settled.rms()).abs() < 1e-9);
+    for c in [
+        "crank_sigma",
+        "shaft_innovation",
+        "clutch_slip",
+        "load_bias",
+    ] {
+        assert!(table.column(c).is_some(), "{c}");
+    }
+
+    let (code, text, err) = run(&[
+        "replay",
+        &log,
+        "--params",
+        &params,
+        "--observer",
+        "--clutch-log",
+        &clutch,
+        "--out",
+        &dir.join("cli.csv"),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    for want in [
+        "with the observer (corrected from the encoders)",
+        "observer  crank innovation (measured - predicted) RMS",
+        "after 0.02 s: innovation RMS",
+        "(after the update)",
+        "paired in order: all the same",
+        "diagnostics:",
+    ] {
+        assert!(text.contains(want), "{want}: {text}");
+    }
+}
+
+/// A slipping clutch injected into bench1 (issue 19: "shift the shaft counts at one
+/// instant"): the shaft's count 8 higher from t = 0.15 s on, where the machine holds
+/// its shaft (I6 from 0.106 s to 0.179 s in its clutch log), is named clutch-slip
+/// within 10 ms; the unshifted log names none.
+#[test]
+fn a_slipping_clutch_injected_into_bench1_is_named_within_10_ms() {
+    let dir = TempDir::new("observe-slip");
+    let log = edited(&dir, "slip.csv", |t, c| {
+        if t >= 0.15 - 1e-9 {
+            let s: i64 = c[4].parse().unwrap();
+            c[4] = (s + 8).to_string();
+        }
+    });
+    let s = replay_of(&[&log, "--observer", "--out", &dir.join("slip-run.csv")]);
+    let o = s.observed.unwrap();
+    let t = o
+        .first("clutch-slip")
+        .unwrap_or_else(|| panic!("named: {o}"));
+    assert!((0.15..=0.16).contains(&t), "within 10 ms: {t}: {o}");
+    let clean = replay_of(&[
+        &data("bench1.csv"),
+        "--observer",
+        "--out",
+        &dir.join("c.csv"),
+    ]);
+    assert_eq!(clean.observed.unwrap().first("clutch-slip"), None);
+}
+
+/// A log the twin wrote itself (S2 at the log's step, through the bench's encoder
+/// law): with no model error the observed twin makes the same events (kinds and modes,
+/// the log's oracle) and raises no diagnostic; its residual is not 0 (the issue's
+/// target): the corrections carry the counts' quantization into the state, and in I0
+/// the unobserved swing link drifts (measured bounds below).
+#[test]
+fn a_log_the_twin_wrote_observed_makes_the_same_events() {
+    let dir = TempDir::new("observe-self");
+    let params = dir.join("s2-1ms.toml");
+    let text = host_sim::ScenarioId::CccS2
+        .file_text()
+        .replace("h = 1e-4", "h = 1e-3");
+    std::fs::write(&params, text).unwrap();
+    let csv = dir.join("s2.csv");
+    let (code, _, err) = run(&["run", &params, "--out", &csv, "--quiet"]);
+    assert_eq!(code, 0, "{err}");
+    let table = Table::from_csv(&std::fs::read_to_string(&csv).unwrap()).unwrap();
+    let col = |n| table.column(n).unwrap_or_else(|| panic!("column {n}"));
+    let (t, theta1, shaft, motor) = (
+        col("t"),
+        col("theta1"),
+        col("shaft_angle"),
+        col("motor_torque"),
+    );
+    let counts = |x: f64| (x / (TAU / 4096.0)).floor() as i64;
+    let mut log = String::from("t,motor_torque,load_torque,crank_counts,shaft_counts\n");
+    for k in 0..t.len() {
+        log.push_str(&format!(
+            "{:.6},{},800.0,{},{}\n",
+            t[k],
+            motor[k],
+            counts(theta1[k]),
+            counts(-shaft[k])
+        ));
+    }
+    let log_path = dir.join("s2-log.csv");
+    std::fs::write(&log_path, log).unwrap();
+    let plain = replay_of(&[&log_path, "--params", &params, "--out", &dir.join("p.csv")]);
+    let s = replay_of(&[
+        &log_path,
+        "--params",
+        &params,
+        "--observer",
+        "--out",
+        &dir.join("o.csv"),
+    ]);
+    let o = s.observed.as_ref().unwrap();
+    // Regression values (measured: RMS 1.38 counts, largest 16 at 0.224 s, in I0 before
+    // a catch): the issue's target is 0, which the open loop meets (below).
+    assert!(s.crank.largest.0.abs() <= 16, "{}", s.crank);
+    assert!(s.crank.rms() <= 1.5, "{}", s.crank);
+    assert!(o.onsets.is_empty(), "{o}");
+    let ev = |p: &str| std::fs::read_to_string(dir.join(p)).unwrap();
+    let (a, b) = (ev("p.events.csv"), ev("o.events.csv"));
+    let kinds = |s: &str| -> Vec<String> {
+        s.lines()
+            .map(|l| l.split(',').skip(1).take(3).collect::<Vec<_>>().join(","))
+            .collect()
+    };
+    assert_eq!(kinds(&a), kinds(&b));
+    assert_eq!(plain.crank.largest.0, 0);
+}
+
+/// Bad logs are refused with --observer as without, the line and column named (exit
+/// status 2), nothing written: a NaN count, a gap in t.
+#[test]
+fn bad_logs_are_named_errors_with_the_observer() {
+    let dir = TempDir::new("observe-bad");
+    let nan = edited(&dir, "nan.csv", |t, c| {
+        if (t - 0.004).abs() < 1e-9 {
+            c[3] = "NaN".into();
+        }
+    });
+    let text = std::fs::read_to_string(data("bench1.csv")).unwrap();
+    let mut rows: Vec<&str> = text.lines().collect();
+    rows.remove(101);
+    let gap = dir.join("gap.csv");
+    std::fs::write(&gap, rows.join("\n")).unwrap();
+    let out = dir.join("out.csv");
+    for (path, want) in [
+        (
+            nan,
+            "nan.csv: line 6, column crank_counts: NaN is not finite",
+        ),
+        (gap, "gap.csv: line 102, column t: t = 0.101 s is 0.002"),
+    ] {
+        let (code, _, err) = run(&["replay", &path, "--observer", "--out", &out]);
+        assert_eq!(code, 2, "{err}");
+        assert!(err.contains(want), "{err}");
+    }
+    assert!(!std::path::Path::new(&out).exists());
+}

@@ -1,0 +1,266 @@
+//! The encoders in the twin's inputs and the observer ([`TwinObserver`]), against
+//! oracles independent of the observer's code: a second twin stepped open-loop as the
+//! machine (its true angles, read through the bench's encoder law `floor(θ / (2π/N))`),
+//! the crank's change asked of a correction, the energy audit's balance, and the
+//! injected faults' known instants.
+
+use std::f64::consts::TAU;
+use structomat::ccc::{
+    CccParams, Diagnostic, Encoder, Inputs, Measurement, Mode, MotorInput, ObserverSettings, Twin,
+    TwinObserver, TwinSettings, TwinStepError,
+};
+use structomat::motor::Motor;
+use structomat::Real;
+
+const N: u32 = 4096;
+const H: f64 = 1e-3;
+
+/// The bench's encoder law.
+fn counts(theta: f64) -> i64 {
+    (theta / (TAU / f64::from(N))).floor() as i64
+}
+
+fn encoder<T: Real>(c: i64) -> Encoder<T> {
+    Encoder {
+        counts: c,
+        per_turn: N,
+        zero: T::zero(),
+    }
+}
+
+/// S2's inputs (SPEC: 12 N·m, T_r = 800 N·m) with the encoders' reading `m`.
+fn s2_inputs<T: Real>(m: Option<Measurement<T>>) -> Inputs<T> {
+    Inputs {
+        motor: MotorInput::Law(Motor::Constant(T::c(12.0))),
+        load: T::c(800.0),
+        measured: m,
+    }
+}
+
+fn twin<T: Real>(crank_deg: f64) -> Twin<T> {
+    let mut s = TwinSettings::reference(T::c(H));
+    s.crank = T::c(crank_deg.to_radians());
+    Twin::new(CccParams::reference(), s, s2_inputs(None)).expect("S2 assembles")
+}
+
+/// The machine: S2's twin in f64 stepped open-loop, read at each step's end.
+struct Machine {
+    twin: Twin<f64>,
+}
+
+impl Machine {
+    fn new() -> Self {
+        Machine { twin: twin(105.0) }
+    }
+
+    /// One period; the encoders' `(crank, shaft)` counts at its end.
+    fn period(&mut self) -> (i64, i64) {
+        self.twin.step(&s2_inputs(None)).expect("the machine steps");
+        (
+            counts(self.twin.link(1).theta),
+            counts(self.twin.shaft_drive_angle()),
+        )
+    }
+}
+
+fn reading<T: Real>(c: (i64, i64)) -> Measurement<T> {
+    Measurement {
+        crank: Some(encoder(c.0)),
+        shaft: Some(encoder(c.1)),
+        rocker: None,
+    }
+}
+
+/// The twin's state as bits: time, every link, the audit.
+fn bits<T: Real>(t: &Twin<T>) -> Vec<u64> {
+    let mut v = vec![t.time().to_f64().to_bits(), t.steps()];
+    for p in 1..9 {
+        let l = t.link(p);
+        v.extend([l.theta, l.omega, l.alpha].map(|x| x.to_f64().to_bits()));
+    }
+    v.push(t.audit().residual().to_f64().to_bits());
+    v
+}
+
+/// Each bad reading is refused by name (resolution 0, a zero angle that is not finite,
+/// a count that jumps by half a turn or more in a step, of each encoder) and neither the
+/// twin nor the observer moves: the state is the last good one, bit for bit.
+#[test]
+fn bad_readings_are_named_errors_and_the_state_is_kept() {
+    let mut machine = Machine::new();
+    let mut t = twin::<f64>(105.0);
+    let mut obs = TwinObserver::new(ObserverSettings::reference());
+    let mut last = (0, 0);
+    for _ in 0..30 {
+        last = machine.period();
+        obs.step(&mut t, &s2_inputs(Some(reading(last))))
+            .expect("a good reading");
+    }
+    let (state, p) = (bits(&t), obs.covariance());
+    let good: Measurement<f64> = reading(last);
+    let mut cases: Vec<(Measurement<f64>, &str, &str)> = Vec::new();
+    for (k, name) in ["crank", "shaft", "rocker"].into_iter().enumerate() {
+        fn slot(m: &mut Measurement<f64>, k: usize) -> &mut Option<Encoder<f64>> {
+            match k {
+                0 => &mut m.crank,
+                1 => &mut m.shaft,
+                _ => &mut m.rocker,
+            }
+        }
+        let mut m = good;
+        let base = slot(&mut m, k).unwrap_or(encoder(0));
+        let mut bad = m;
+        *slot(&mut bad, k) = Some(Encoder {
+            per_turn: 0,
+            ..base
+        });
+        cases.push((bad, name, "resolution (counts per turn) = 0e0 must be > 0"));
+        let mut bad = m;
+        *slot(&mut bad, k) = Some(Encoder {
+            zero: f64::NAN,
+            ..base
+        });
+        cases.push((bad, name, "zero = not a number must be finite"));
+        if k < 2 {
+            let mut bad = m;
+            *slot(&mut bad, k) = Some(Encoder {
+                counts: base.counts + 2048,
+                ..base
+            });
+            cases.push((
+                bad,
+                name,
+                "jump (counts in one step) = 2.048e3 must be under half a turn",
+            ));
+        }
+    }
+    for (m, name, want) in cases {
+        let e = obs.step(&mut t, &s2_inputs(Some(m))).unwrap_err();
+        assert!(matches!(e, TwinStepError::BadInput { .. }), "{e:?}");
+        let text = e.to_string();
+        assert!(text.contains(&format!("{name} encoder {want}")), "{text}");
+        assert_eq!(bits(&t), state, "{name}: the twin moved");
+        assert_eq!(obs.covariance(), p, "{name}: the observer moved");
+    }
+    // Just under half a turn is a reading (the twin takes it; the observer's gate
+    // names it a jump and does not correct by it).
+    let mut m = good;
+    m.crank = Some(encoder(last.0 + 2047));
+    let up = obs.step(&mut t, &s2_inputs(Some(m))).expect("a reading");
+    assert!(up.diagnostics.contains(Diagnostic::EncoderJump("crank")));
+    assert!(up.correction.is_none());
+}
+
+/// A correction of the crank by (1 mrad, 0.05 rad/s) in a 1-DOF mode (I8, the crank
+/// its coordinate) and in a 2-DOF mode (I0): the crank moves by what was asked (to the
+/// second order of the least-norm map, 1e-6 rad and 1e-3 rad/s here), the energy it
+/// puts in is booked so that the audit's residual stays where it was (to 1e-12 J)
+/// and equals the change of the kinetic and potential energies, and the twin steps
+/// on from there with its energy balance checked each step.
+#[test]
+fn a_correction_moves_the_crank_and_books_its_energy() {
+    for (steps, mode) in [(10, Mode::I8), (40, Mode::I0)] {
+        let mut t = twin::<f64>(105.0);
+        for _ in 0..steps {
+            t.step(&s2_inputs(None)).unwrap();
+        }
+        assert_eq!(t.mode(), mode);
+        let (before, audit) = (t.link(1), t.audit());
+        let c = t.correct_crank(1e-3, 0.05).expect("a correction");
+        assert!(c.applied);
+        let after = t.link(1);
+        let (dt, dw) = (after.theta - before.theta, after.omega - before.omega);
+        assert!((dt - 1e-3).abs() < 1e-6, "{mode}: Δθ1 {dt}");
+        assert!((dw - 0.05).abs() < 1e-3, "{mode}: Δω1 {dw}");
+        assert_eq!(c.crank, (dt, dw));
+        let a = t.audit();
+        assert!(
+            (a.residual() - audit.residual()).abs() < 1e-12,
+            "{mode}: {a:?}"
+        );
+        let de = (a.kinetic + a.potential) - (audit.kinetic + audit.potential);
+        assert!(
+            (a.correction - audit.correction - de).abs() < 1e-12,
+            "{mode}"
+        );
+        assert!((c.energy - de).abs() < 1e-12 && de != 0.0, "{mode}");
+        for _ in 0..50 {
+            t.step(&s2_inputs(None)).expect("steps on, balance checked");
+        }
+        // Not finite: refused, nothing moved.
+        let s = bits(&t);
+        assert!(t.correct_crank(f64::NAN, 0.0).is_err());
+        assert_eq!(bits(&t), s);
+    }
+}
+
+/// A twin with no model error (the machine's own twin and inputs), observed through
+/// its encoders in f64 and in f32: it makes the machine's 23 events of S2 in the
+/// machine's order (the same kinds and modes), each within 10 ms, raises no
+/// diagnostic, and stays within 16 counts of the machine's crank (a regression bound,
+/// not the target of 0: the corrections carry the counts' quantization into the
+/// state; see the README's observer paragraph).
+#[test]
+fn with_no_model_error_the_observer_keeps_the_machine_s_events() {
+    fn run<T: Real>() {
+        let mut machine = Machine::new();
+        let mut t = twin::<T>(105.0);
+        let mut obs = TwinObserver::new(ObserverSettings::reference());
+        let res = TAU / f64::from(N);
+        let (mut worst, mut ours, mut theirs) = (0.0f64, Vec::new(), Vec::new());
+        for k in 0..1000 {
+            let c = machine.period();
+            let up = obs.step(&mut t, &s2_inputs(Some(reading(c)))).unwrap();
+            assert!(up.diagnostics.is_empty(), "step {k}: {:?}", up.diagnostics);
+            let off = (t.link(1).theta.to_f64() - machine.twin.link(1).theta) / res;
+            worst = worst.max(off.abs());
+            theirs.extend(machine.twin.events().iter().map(|e| (e.time, e.kind, e.to)));
+            ours.extend(t.events().iter().map(|e| (e.time.to_f64(), e.kind, e.to)));
+        }
+        assert!(worst <= 16.0, "{worst} counts off the machine");
+        assert_eq!(theirs.len(), 23, "S2's events");
+        assert_eq!(ours.len(), 23);
+        for (a, b) in theirs.iter().zip(&ours) {
+            assert_eq!((a.1, a.2), (b.1, b.2));
+            assert!((a.0 - b.0).abs() <= 0.01, "{a:?} {b:?}");
+        }
+    }
+    run::<f64>();
+    run::<f32>();
+}
+
+/// Faults injected into the machine's readings at a known step: the shaft's count
+/// shifted by 8 from an instant in I8 (a slipping clutch: the shaft moves where the
+/// mode holds it) is named within 10 ms; a crank count off by 40 for one sample is
+/// named an encoder jump at that step and not corrected by.
+#[test]
+fn injected_faults_are_named_at_their_instants() {
+    let mut machine = Machine::new();
+    let mut t = twin::<f64>(105.0);
+    let mut obs = TwinObserver::new(ObserverSettings::reference());
+    let (slip_at, jump_at) = (12, 600);
+    let mut slip_seen = None;
+    for k in 0..700 {
+        let mut c = machine.period();
+        if k >= slip_at {
+            c.1 += 8;
+        }
+        if k == jump_at {
+            c.0 += 40;
+        }
+        let up = obs.step(&mut t, &s2_inputs(Some(reading(c)))).unwrap();
+        if k == slip_at {
+            assert_eq!(t.mode(), Mode::I8, "the shaft is held at the slip");
+        }
+        if up.diagnostics.contains(Diagnostic::ClutchSlip) {
+            slip_seen.get_or_insert(k);
+        }
+        let jump = up.diagnostics.contains(Diagnostic::EncoderJump("crank"));
+        assert_eq!(jump, k == jump_at, "step {k}");
+        if jump {
+            assert!(up.correction.is_none());
+        }
+    }
+    let k = slip_seen.expect("the slip named");
+    assert!((slip_at..slip_at + 10).contains(&k), "named at step {k}");
+}
