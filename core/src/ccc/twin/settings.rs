@@ -46,8 +46,8 @@ pub const SINGULAR_CONDITIONING: f64 = 1e-2;
 /// A diode branch whose rod and lever come in line within this many steps at their
 /// present rate counts as in line when a step fails ([`TwinStepError::Diode`](super::TwinStepError::Diode)). In f64 the
 /// branch's |sin| is under [`SINGULAR_CONDITIONING`] by then; in f32 rounding breaks
-/// the energy balance 8 to 20 steps before (S1 at h = 1e-4 s: 0.3219 s against f64's
-/// 0.3238 s, 20 steps from in line at its rate), at |sin| of 3e-2 to 6e-2.
+/// the energy balance 8 to 20 steps before (S1 at h = 1e-4 s: 0.3225 s against f64's
+/// 0.3238 s, 13 steps before it), at |sin| of 3e-2 to 6e-2.
 pub const DIODE_HORIZON_STEPS: f64 = 32.0;
 
 /// Settings fixed at start.
