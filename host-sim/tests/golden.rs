@@ -87,7 +87,7 @@ const PINS: &[Pin<'static>] = &[
     Pin {
         args: "ccc-s1",
         exit: 0,
-        csv: "b575b5384afbab785fbe4d3c9c5790b26fe5e5974edcd4a570bb7895e56e1403",
+        csv: "ea23442c383fd10d5c2a0201704d773e0b5f0a7718780fe7597ef6df611b009a",
         logs: Some((
             "2a18d19a58b935cc5a81a088e9c456f81ad855f74a9f76a5d7ec92b8b8ba339b",
             "9a52b761f69ab666f48cadb42b788f2fabceddd39201f1066997acf316fd6238",
@@ -120,7 +120,7 @@ const PINS: &[Pin<'static>] = &[
     Pin {
         args: "ccc-s1 --f32",
         exit: 0,
-        csv: "42ea5d91d9ffec0e94ed27b4c4f28189be3d647217cb21b9c4bdf7ab880d0be4",
+        csv: "06b29c1e781435f18a112bb32eed564cde22fcd3389461dcb557262f50e4caf5",
         logs: Some((
             "2a18d19a58b935cc5a81a088e9c456f81ad855f74a9f76a5d7ec92b8b8ba339b",
             "9a52b761f69ab666f48cadb42b788f2fabceddd39201f1066997acf316fd6238",

@@ -71,8 +71,8 @@ use slots::Slots;
 ///
 /// # Contract
 ///
-/// **Bounded work per step.** A step is at most 4 attempts (1, 2, 4 and 16 DP5 steps
-/// between events, 2 only when the energy check predicts it passes: 23 steps' work in
+/// **Bounded work per step.** A step is at most 5 attempts (1, 2, 3, 4 and 16 DP5 steps
+/// between events, 2 and 3 only when the energy check predicts they pass: 26 steps' work in
 /// all; [`SUBSTEPS`] are the core's rungs), each with at most
 /// [`MAX_EVENTS_PER_STEP`] events, each located in at most [`MAX_LOCATE_ITER`]
 /// evaluations and settled by at most 7 candidate modes of at most 3 coordinate choices
@@ -248,7 +248,7 @@ struct Work<T: Real> {
 /// energy error per step is O(h⁶), so `n` sub-steps where there were `done` divide an
 /// undivided jump by about `(n/done)⁵`. The rungs of the core's [`SUBSTEPS`] are
 /// always tried (a mechanism failure, or a prediction that fails, goes on to them);
-/// the twin's extra rung (2) only when it is predicted to pass by a factor
+/// the twin's extra rungs (2 and 3) only when predicted to pass by a factor
 /// [`RUNG_SAFETY`]. S2 at h = 1 ms: the catch I6 -> A68 at 0.0666 s broke the balance
 /// by 9.9 undivided, where 4 sub-steps had redone it (706k Thumb-2 instructions on the
 /// Cortex-M7 in f64).
