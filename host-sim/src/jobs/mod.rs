@@ -1,7 +1,9 @@
-//! Many runs: the worker pool ([`pool`]), the runs of a batch file ([`batch`]) and the
+//! Many runs: the worker pool ([`pool`]), the runs of a batch file ([`batch`]), the
 //! grid of variants of a parameter sweep ([`sweep`]), each run through the one
-//! pipeline of [`crate::run`].
+//! pipeline of [`crate::run`], and the replays of a bench log that identify the
+//! converter's parameters ([`identify`]).
 
 pub mod batch;
+pub mod identify;
 pub mod pool;
 pub mod sweep;

@@ -351,8 +351,10 @@ pub fn simulate<T: Real>(
             precision::<T>()
         )));
     }
+    // The run file's `motor_offset` corrects the current sensor's torque (0: as logged).
+    let offset = settings.converter.motor_offset;
     let inputs = |k: usize| Inputs {
-        motor: MotorInput::Torque(T::c(log.motor[k])),
+        motor: MotorInput::Torque(T::c(log.motor[k] + offset)),
         load: T::c(log.load[k]),
         measured: None,
     };
