@@ -199,7 +199,7 @@ The bench log and the clutch log are replay's (host-sim help replay). Each trial
 replays the log open-loop on the converter of --params with the --fit parameters set;
 its residuals are, per sample, the twin's crank and shaft angle in counts (the encoder
 law without its floor) less the middle of the count measured, and with --clutch-log,
-per pair of events, the time difference in units of 0.1 ms (a pair that differs, or an
+per pair of events, the time difference in units of 0.05 ms (a pair that differs, or an
 event missing: as 10 ms). Nelder-Mead (argmin) minimizes their sum of squares within
 the bounds: a mass or an inertia within ±10 % of the base file's value, a friction
 coefficient in [0, 1] (N·m·s/rad or N·m), converter.motor_offset in [-2, 2] N·m.

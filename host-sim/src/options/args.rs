@@ -439,10 +439,11 @@ pub struct IdentifyArgs {
     #[arg(long, value_name = "BASE.toml")]
     pub params: Option<String>,
     /// The parameters to fit, their run-file keys separated by commas (default
-    /// converter.mass,converter.motor_offset,converter.friction.viscous.A)
+    /// converter.mass, converter.link.1.mass, converter.link.2.mass,
+    /// converter.friction.viscous.A, converter.friction.viscous.B)
     #[arg(long, value_name = "KEYS")]
     pub fit: Option<String>,
-    /// Nelder-Mead's iterations at most (default 400)
+    /// Nelder-Mead's iterations at most, of each of its two searches (default 600)
     #[arg(long, value_name = "N")]
     pub max_iters: Option<String>,
     /// The identified converter run file

@@ -15,7 +15,8 @@
 //! the lower, 1 at the upper): a trial outside is evaluated at the nearest point inside
 //! plus [`OUT_OF_BOUNDS`] times the squared distance, so the simplex stays inside.
 //! The first simplex is the base file's values (clamped into the bounds) and a step of
-//! [`FIRST_STEP`] of each range. It ends after `max_iters` iterations or when the
+//! [`RESTART_STEPS`]`[0]` of each range, and the search is
+//! restarted once from its best with a step of `[1]`. It ends after `max_iters` iterations or when the
 //! simplex's costs agree to [`COST_TOLERANCE`]. Single-threaded and without random
 //! numbers: the same inputs give the same bits.
 //!
@@ -41,11 +42,11 @@ use std::io::Write;
 use std::rc::Rc;
 
 /// An event's time difference that weighs as much as one count of encoder residual, s.
-pub const EVENT_SCALE: f64 = 1e-4;
+pub const EVENT_SCALE: f64 = 5e-5;
 
 /// The residual of a pair of events that differ, or of an event missing in either
-/// list: as an event 100 · [`EVENT_SCALE`] = 10 ms off.
-pub const EVENT_MISMATCH: f64 = 100.0;
+/// list: as an event 200 · [`EVENT_SCALE`] = 10 ms off.
+pub const EVENT_MISMATCH: f64 = 200.0;
 
 /// The cost of a trial the twin cannot be set up with (a mass that makes the
 /// parameters invalid): above any replay's.
@@ -54,8 +55,9 @@ const SETUP_FAILED: f64 = 1e15;
 /// The penalty of a trial outside the bounds, per squared scaled distance.
 pub const OUT_OF_BOUNDS: f64 = 1e9;
 
-/// The first simplex's step along each parameter, a fraction of its range.
-pub const FIRST_STEP: f64 = 0.25;
+/// The first simplex's step along each parameter, a fraction of its range, of the
+/// search and of its restart from the first's best.
+pub const RESTART_STEPS: [f64; 2] = [0.25, 0.05];
 
 /// The search ends when the simplex's costs have a standard deviation below this.
 pub const COST_TOLERANCE: f64 = 1e-3;
@@ -322,45 +324,51 @@ pub fn fit(problem: Problem<'_>, max_iters: u64, quiet: bool) -> Result<Fit, Run
         .iter()
         .map(|u| u.clamp(0.0, 1.0))
         .collect();
-    let mut simplex = vec![u0.clone()];
-    for i in 0..u0.len() {
-        let mut v = u0.clone();
-        // Into the box: up from the lower half, down from the upper.
-        v[i] += if v[i] + FIRST_STEP <= 1.0 {
-            FIRST_STEP
-        } else {
-            -FIRST_STEP
-        };
-        simplex.push(v);
-    }
-    let solver = NelderMead::new(simplex)
-        .with_sd_tolerance(COST_TOLERANCE)
-        .map_err(|e| RunError::Setup(format!("identify: Nelder-Mead: {e}")))?;
     let evaluations = Rc::clone(&problem.evaluations);
-    let mut exec = Executor::new(problem, solver).configure(|s| s.max_iters(max_iters));
-    if !quiet {
-        exec = exec.add_observer(
-            ProgressLines {
-                evaluations: Rc::clone(&evaluations),
-                max_iters,
-            },
-            ObserverMode::Every(10),
-        );
+    let mut problem = problem;
+    let mut best_u = u0;
+    let mut iterations = 0;
+    let mut termination = String::new();
+    // A second search restarted from the first's best with a smaller simplex: a
+    // collapsed simplex is Nelder-Mead's known failure on a narrow valley.
+    for step in RESTART_STEPS {
+        let mut simplex = vec![best_u.clone()];
+        for i in 0..best_u.len() {
+            let mut v = best_u.clone();
+            // Into the box: up from the lower half, down from the upper.
+            v[i] += if v[i] + step <= 1.0 { step } else { -step };
+            simplex.push(v);
+        }
+        let solver = NelderMead::new(simplex)
+            .with_sd_tolerance(COST_TOLERANCE)
+            .map_err(|e| RunError::Setup(format!("identify: Nelder-Mead: {e}")))?;
+        let mut exec = Executor::new(problem, solver).configure(|s| s.max_iters(max_iters));
+        if !quiet {
+            exec = exec.add_observer(
+                ProgressLines {
+                    evaluations: Rc::clone(&evaluations),
+                    max_iters,
+                },
+                ObserverMode::Every(10),
+            );
+        }
+        let mut result = exec
+            .run()
+            .map_err(|e| RunError::Setup(format!("identify: the search failed: {e}")))?;
+        problem = result
+            .problem
+            .take_problem()
+            .ok_or_else(|| RunError::Setup("identify: the search kept its problem".to_string()))?;
+        let state = &result.state;
+        if let Some(b) = state.get_best_param() {
+            best_u = b.clone();
+        }
+        iterations += state.get_iter();
+        if !termination.is_empty() {
+            termination.push_str(", then ");
+        }
+        termination.push_str(&state.get_termination_status().to_string());
     }
-    let mut result = exec
-        .run()
-        .map_err(|e| RunError::Setup(format!("identify: the search failed: {e}")))?;
-    let problem = result
-        .problem
-        .take_problem()
-        .ok_or_else(|| RunError::Setup("identify: the search kept its problem".to_string()))?;
-    let state = &result.state;
-    let best_u = state
-        .get_best_param()
-        .cloned()
-        .unwrap_or_else(|| u0.clone());
-    let iterations = state.get_iter();
-    let termination = state.get_termination_status().to_string();
     let inside: Vec<f64> = best_u.iter().map(|x| x.clamp(0.0, 1.0)).collect();
     let values = problem.values(&inside);
     let best = problem.trial(&values)?;
