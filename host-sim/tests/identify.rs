@@ -141,9 +141,10 @@ fn a_log_of_known_parameters_is_identified_back() {
     let text = s2
         .replace("h = 1e-4", "h = 1e-3")
         .replace("mass = 6.0 ", "mass = 6.42 ")
-        .replace(
+        .replacen(
             "\n[[converter.link]]",
             "\n[converter.friction]\nviscous = { A = 0.03 }\n\n[[converter.link]]",
+            1,
         );
     assert!(text.contains("h = 1e-3") && text.contains("mass = 6.42") && text.contains("A = 0.03"));
     let params = dir.join("truth.toml");

@@ -23,8 +23,9 @@
 //! **The uncertainty.** At the optimum, the Jacobian `J` of the residuals by central
 //! differences (a step of [`JACOBIAN_STEP`] of each range), the residual variance
 //! `s² = rᵀr / (N - p)` and the Gauss-Newton covariance `s² (JᵀJ)⁻¹`: each parameter's
-//! σ is the root of its diagonal. It assumes independent residuals, which quantization
-//! of a smooth signal is not quite: read σ as the scale of what the log determines.
+//! σ is the root of its diagonal, with `s²` inflated by the residuals'
+//! autocorrelation ([`correlation_factor`]): quantization of a smooth signal is not
+//! independent from sample to sample.
 
 use crate::error::Sci;
 use crate::model::bench::{BenchLog, ClutchLog, COUNTS_PER_TURN};
@@ -402,6 +403,41 @@ pub fn fit(problem: Problem<'_>, max_iters: u64, quiet: bool) -> Result<Fit, Run
     })
 }
 
+/// The most lags of the residuals' autocorrelation summed by [`correlation_factor`].
+pub const MAX_LAG: usize = 100;
+
+/// The variance inflation of a mean over correlated residuals `r`, `1 + 2 Σ ρ_k` (ρ_k
+/// the lag-k autocorrelation, summed while positive, up to [`MAX_LAG`]): the number of
+/// samples over the number of independent ones. An encoder's quantization error is
+/// the same for the samples that a slow angle spends in one count, so the residuals
+/// are not independent and `s² (JᵀJ)⁻¹` alone understates σ.
+pub fn correlation_factor(r: &[f64]) -> f64 {
+    let n = r.len();
+    if n < 2 {
+        return 1.0;
+    }
+    let mean = r.iter().sum::<f64>() / n as f64;
+    let c = |k: usize| -> f64 {
+        (0..n - k)
+            .map(|i| (r[i] - mean) * (r[i + k] - mean))
+            .sum::<f64>()
+            / n as f64
+    };
+    let c0 = c(0);
+    if c0 <= 0.0 {
+        return 1.0;
+    }
+    let mut sum = 0.0;
+    for k in 1..MAX_LAG.min(n) {
+        let rho = c(k) / c0;
+        if rho <= 0.0 {
+            break;
+        }
+        sum += rho;
+    }
+    1.0 + 2.0 * sum
+}
+
 /// The Gauss-Newton σ of each value at the optimum `values` (its trial `best`).
 fn uncertainty(problem: &Problem<'_>, values: &[f64], best: &Trial) -> Result<Vec<f64>, RunError> {
     let r0 = best.residuals();
@@ -433,7 +469,8 @@ fn uncertainty(problem: &Problem<'_>, values: &[f64], best: &Trial) -> Result<Ve
         }
     }
     let dof = n.saturating_sub(p).max(1);
-    let s2 = r0.iter().map(|r| r * r).sum::<f64>() / dof as f64;
+    let s2 = r0.iter().map(|r| r * r).sum::<f64>() / dof as f64
+        * correlation_factor(&best.crank).max(correlation_factor(&best.shaft));
     let jtj = j.transpose() * &j;
     Ok(match jtj.try_inverse() {
         Some(inv) => (0..p).map(|i| (s2 * inv[(i, i)]).sqrt()).collect(),
