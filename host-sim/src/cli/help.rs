@@ -94,7 +94,8 @@ Run files (TOML; the full reference with every key: host-sim/scenarios/README.md
   The converter: [converter] a, f, h (pivots A, F and shaft H), [[converter.link]] x 8
     (length, mass, inertia), rocker_d, mass, mass_inertia, mass_at, shaft_inertia,
     drive = \"cw\"|\"ccw\", gravity, branch_c, branch_g, branch_i = \"left\"|\"right\",
-    crank_deg, swing_deg, crank_speed, swing_speed; [converter.friction] (all 0 by
+    crank_deg, swing_deg, crank_speed, swing_speed, motor_offset (N·m added to a
+    bench log's measured motor torque by replay, default 0); [converter.friction] (all 0 by
     default): viscous = { A, B, C, E, F, D5, D7, G, I } (N·m·s/rad on each joint's
     relative speed), coulomb = { ... } (dry friction, N·m), coulomb_eps (its
     regularization speed, rad/s, default 0.01), clutch_drag (N·m·s/rad, an overrunning
@@ -236,6 +237,29 @@ The clutch log (CSV: t, event, from, to; the events and modes in host-sim's name
                 the diagnostic
   and the summary the innovations' and residuals' RMS and largest (over the run and
   after its first 20 ms), the corrections' energy and each diagnostic's onsets.";
+
+/// After the options in `host-sim identify --help`: what is fitted, how, the file.
+pub const IDENTIFY: &str = "\
+The bench log and the clutch log are replay's (host-sim help replay). Each trial
+replays the log open-loop on the converter of --params with the --fit parameters set;
+its residuals are, per sample, the twin's crank and shaft angle in counts (the encoder
+law without its floor) less the middle of the count measured, and with --clutch-log,
+per pair of events, the time difference in units of 0.05 ms (a pair that differs, or an
+event missing: as 10 ms). Nelder-Mead (argmin) minimizes their sum of squares within
+the bounds: a mass or an inertia within ±10 % of the base file's value, a friction
+coefficient in [0, 1] (N·m·s/rad or N·m), converter.motor_offset in [-2, 2] N·m.
+
+--fit keys: converter.link.K.mass, converter.link.K.inertia (K = 0..7, SPEC 3's
+order), converter.mass, converter.mass_inertia, converter.friction.viscous.J,
+converter.friction.coulomb.J (J one of A B C E F D5 D7 G I),
+converter.friction.clutch_drag, converter.motor_offset.
+
+The file written is the base file with the identified values at their keys (and name,
+description); its comments give each value ± its standard uncertainty from the
+Gauss-Newton covariance s²(JᵀJ)⁻¹ at the optimum (J the residuals' Jacobian by central
+differences, s² their variance), the bounds, and the replay's residuals and events.
+replay --params and run take it. Deterministic: the same inputs write the same bytes.
+A progress line goes to stderr every 10 iterations (not with --quiet).";
 
 /// After the options in `host-sim fmu --help`: what the FMU is and how it steps.
 pub const FMU: &str = "\

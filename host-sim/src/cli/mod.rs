@@ -5,13 +5,15 @@ pub mod commands;
 pub mod help;
 
 use crate::error::{report_write, UsageError, EXIT_FAILURE, EXIT_OK, EXIT_USAGE, HINT};
-use crate::jobs::{batch, design, sweep};
+use crate::jobs::{batch, design, identify, sweep};
 use crate::model::scenarios::Source;
 use crate::options::args::{
-    AnalyzeArgs, BatchArgs, DesignArgs, FmuArgs, PlotArgs, ReplayArgs, RunArgs, SweepArgs,
+    AnalyzeArgs, BatchArgs, DesignArgs, FmuArgs, IdentifyArgs, PlotArgs, ReplayArgs, RunArgs,
+    SweepArgs,
 };
 use crate::options::{
-    BatchOptions, DesignOptions, FmuOptions, PlotOptions, ReplayOptions, RunOptions, SweepOptions,
+    BatchOptions, DesignOptions, FmuOptions, IdentifyOptions, PlotOptions, ReplayOptions,
+    RunOptions, SweepOptions,
 };
 use crate::output::pictures;
 use crate::run;
@@ -52,6 +54,10 @@ pub enum CliCommand {
     /// machine's clutch log, its events paired with the twin's
     #[command(after_long_help = help::REPLAY)]
     Replay(ReplayArgs),
+    /// Fit the converter's unknown parameters to a bench log (its open-loop replay's
+    /// encoder and clutch-event errors) and write them as a converter run file
+    #[command(after_long_help = help::IDENTIFY)]
+    Identify(IdentifyArgs),
     /// Find and print the structomatic formula, the DOF and each group with its links
     /// and joints
     Analyze(AnalyzeArgs),
@@ -82,6 +88,8 @@ pub enum Command {
     Run(RunOptions),
     /// `host-sim replay LOG.csv [--params FILE.toml] [--observer] [--clutch-log FILE] --out FILE`.
     Replay(ReplayOptions),
+    /// `host-sim identify LOG.csv [--clutch-log FILE] [--params FILE.toml] --out FILE`.
+    Identify(IdentifyOptions),
     /// `host-sim analyze FILE.toml|<scenario>`.
     Analyze(Source),
     /// `host-sim batch FILE --out-dir DIR [--threads N] [--quiet]`.
@@ -119,6 +127,7 @@ where
         CliCommand::List => Ok(Command::List),
         CliCommand::Run(a) => a.options().map(Command::Run),
         CliCommand::Replay(a) => a.options().map(Command::Replay),
+        CliCommand::Identify(a) => a.options().map(Command::Identify),
         CliCommand::Analyze(a) => a.source().map(Command::Analyze),
         CliCommand::Batch(a) => a.options().map(Command::Batch),
         CliCommand::Sweep(a) => a.options().map(Command::Sweep),
@@ -145,6 +154,7 @@ where
         },
         Ok(Command::Run(opts)) => run::execute(&opts, stdout, stderr),
         Ok(Command::Replay(opts)) => run::replay::execute(&opts, stdout, stderr),
+        Ok(Command::Identify(opts)) => identify::execute(&opts, stdout, stderr),
         Ok(Command::Analyze(source)) => match commands::analyze(&source) {
             Ok(text) => match print(stdout, &text) {
                 Ok(()) => EXIT_OK,

@@ -447,6 +447,9 @@ pub struct Converter {
     pub crank_speed: f64,
     /// Initial swing-link speed, rad/s (default 0).
     pub swing_speed: f64,
+    /// `converter.motor_offset`: added to a measured motor torque (a bench log's,
+    /// `host-sim replay`), N·m, CCW positive (default 0): a current sensor's offset.
+    pub motor_offset: f64,
     /// `run.mode`: `true` with the diode's clutches, `false` in free mode.
     pub clutch: bool,
     /// `run.motor`: the motor on the crank.
@@ -639,6 +642,7 @@ struct RawConverter {
     swing_deg: Option<f64>,
     crank_speed: Option<f64>,
     swing_speed: Option<f64>,
+    motor_offset: Option<f64>,
 }
 
 /// `[converter.friction]`: the losses of a real machine (SPEC 5), each 0 when absent.
@@ -1154,6 +1158,7 @@ fn converter(ck: &Check<'_>, c: RawConverter, run: &RawRun) -> Result<Converter,
         swing_deg: ck.finite("converter.swing_deg", c.swing_deg.unwrap_or(90.0))?,
         crank_speed: ck.finite("converter.crank_speed", c.crank_speed.unwrap_or(0.0))?,
         swing_speed: ck.finite("converter.swing_speed", c.swing_speed.unwrap_or(0.0))?,
+        motor_offset: ck.finite("converter.motor_offset", c.motor_offset.unwrap_or(0.0))?,
         clutch,
         motor,
         load,

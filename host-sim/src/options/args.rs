@@ -6,12 +6,13 @@
 //! and repeated options.
 
 use super::{
-    AnimFormat, BatchOptions, DesignOptions, FmuOptions, Output, PlotOptions, ProgressStyle,
-    ReplayOptions, RunOptions, SweepOptions, DEFAULT_FPS, DEFAULT_SLOW, FPS_RANGE, MAX_THREADS,
-    SLOW_RANGE,
+    AnimFormat, BatchOptions, DesignOptions, FmuOptions, IdentifyOptions, Output, PlotOptions,
+    ProgressStyle, ReplayOptions, RunOptions, SweepOptions, DEFAULT_FPS, DEFAULT_SLOW, FPS_RANGE,
+    MAX_THREADS, SLOW_RANGE,
 };
 use crate::error::{usage_err, Sci, UsageError};
 use crate::model::bench::{BenchLog, ClutchLog};
+use crate::model::identifiable::{self, DEFAULT_FIT, DEFAULT_MAX_ITERS, MAX_ITERS};
 use crate::model::runfile::MAX_CONVERTER_LOAD;
 use crate::model::scenarios::{ScenarioId, Source};
 use clap::{Args, Parser};
@@ -444,6 +445,98 @@ impl ReplayArgs {
             clutch,
             out: parse_path("--out", &self.out)?,
             observer: self.observer,
+            quiet: self.quiet,
+        })
+    }
+}
+
+/// The arguments of `host-sim identify`.
+#[derive(Args, Clone, Debug, PartialEq)]
+pub struct IdentifyArgs {
+    /// The bench log (CSV: t, motor_torque, load_torque, crank_counts, shaft_counts)
+    #[arg(value_name = "LOG.csv")]
+    pub log: String,
+    /// The machine's clutch events (CSV: t, event, from, to): their times are fitted too
+    #[arg(long, value_name = "CLUTCH.csv")]
+    pub clutch_log: Option<String>,
+    /// The converter run file to start from (its values are the base of the bounds);
+    /// default ccc-s2, SPEC's machine
+    #[arg(long, value_name = "BASE.toml")]
+    pub params: Option<String>,
+    /// The parameters to fit, their run-file keys separated by commas (default
+    /// converter.mass, converter.link.1.mass, converter.link.2.mass,
+    /// converter.friction.viscous.A, converter.friction.viscous.B)
+    #[arg(long, value_name = "KEYS")]
+    pub fit: Option<String>,
+    /// Nelder-Mead's iterations at most, of each of its two searches (default 600)
+    #[arg(long, value_name = "N")]
+    pub max_iters: Option<String>,
+    /// The identified converter run file
+    #[arg(long, value_name = "PARAMS.toml")]
+    pub out: String,
+    /// No progress lines and no summary
+    #[arg(long)]
+    pub quiet: bool,
+}
+
+impl IdentifyArgs {
+    /// The checked options: the logs read and validated, the base run file read (it
+    /// must describe the converter with its clutches), the keys known.
+    pub fn options(&self) -> Result<IdentifyOptions, UsageError> {
+        let log_path = parse_path("identify", &self.log)?;
+        let log = BenchLog::read(&log_path).map_err(|e| usage_err(format!("identify: {e}")))?;
+        let (params, base_text) = match self.params.as_deref() {
+            None => (
+                Source::Builtin(ScenarioId::CccS2),
+                ScenarioId::CccS2.file_text().to_string(),
+            ),
+            Some(p) => {
+                let source = parse_source("--params", p)?;
+                let text = match source.builtin() {
+                    Some(id) => id.file_text().to_string(),
+                    None => std::fs::read_to_string(p)
+                        .map_err(|e| usage_err(format!("--params: {p}: cannot read: {e}")))?,
+                };
+                (source, text)
+            }
+        };
+        if !params.is_converter() || params.is_free_converter() {
+            return Err(usage_err(format!(
+                "--params: {} is not the converter with its clutches (a converter run \
+                 file, as ccc-s2's, expected)",
+                params.name()
+            )));
+        }
+        let clutch = match self.clutch_log.as_deref() {
+            None => None,
+            Some(p) => {
+                let path = parse_path("--clutch-log", p)?;
+                let c =
+                    ClutchLog::read(&path).map_err(|e| usage_err(format!("--clutch-log: {e}")))?;
+                Some((path, Arc::new(c)))
+            }
+        };
+        let fit = identifiable::parse_list(self.fit.as_deref().unwrap_or(DEFAULT_FIT))
+            .map_err(|e| usage_err(format!("--fit: {e}")))?;
+        let max_iters = match self.max_iters.as_deref() {
+            None => DEFAULT_MAX_ITERS,
+            Some(v) => match v.parse::<u64>() {
+                Ok(n) if (1..=MAX_ITERS).contains(&n) => n,
+                _ => {
+                    return Err(usage_err(format!(
+                        "--max-iters: '{v}' is not a whole number from 1 to {MAX_ITERS}"
+                    )))
+                }
+            },
+        };
+        Ok(IdentifyOptions {
+            log: (log_path, Arc::new(log)),
+            clutch,
+            params,
+            base_text,
+            fit,
+            max_iters,
+            out: parse_path("--out", &self.out)?,
             quiet: self.quiet,
         })
     }

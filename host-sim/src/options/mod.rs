@@ -1,11 +1,12 @@
-//! What a command is asked to do: the options of `run`, `replay`, `batch`, `sweep` and
-//! `plot` (parsed from the command line by [`args`]), and the checks every run makes on them
+//! What a command is asked to do: the options of `run`, `replay`, `identify`, `batch`,
+//! `sweep` and `plot` (parsed from the command line by [`args`]), and the checks every run makes on them
 //! before its first step ([`Steps`]).
 
 pub mod args;
 
 use crate::error::{RunError, Sci, UsageError};
 use crate::model::bench::{BenchLog, ClutchLog};
+use crate::model::identifiable::Param;
 use crate::model::scenarios::Source;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -135,6 +136,28 @@ pub struct PlotOptions {
     pub csv: PathBuf,
     /// Where the plots go.
     pub out_dir: PathBuf,
+}
+
+/// Options of `host-sim identify`: a bench log (and clutch log), read and validated,
+/// the converter to start from and the parameters to fit.
+#[derive(Clone, Debug, PartialEq)]
+pub struct IdentifyOptions {
+    /// The bench log: the path as given and its contents.
+    pub log: (PathBuf, Arc<BenchLog>),
+    /// `--clutch-log`: the machine's clutch events, path and contents.
+    pub clutch: Option<(PathBuf, Arc<ClutchLog>)>,
+    /// `--params`: the converter's run file to start from (default: ccc-s2).
+    pub params: Source,
+    /// Its text (the identified file is it with the values set).
+    pub base_text: String,
+    /// `--fit`: the parameters to fit.
+    pub fit: Vec<Param>,
+    /// `--max-iters`: Nelder-Mead's iterations at most.
+    pub max_iters: u64,
+    /// `--out`: the identified run file.
+    pub out: PathBuf,
+    /// No progress lines, no summary.
+    pub quiet: bool,
 }
 
 /// The most threads `host-sim batch --threads` takes (a guard against a typo that

@@ -278,6 +278,35 @@ fn converter_plots(table: &Table, name: &str) -> Vec<(String, Figure)> {
             .collect(),
     );
     out.push(("mode".to_string(), mode_figure(name, mode)));
+    // A replay's CSV (`host-sim replay`): the encoders measured against the twin's.
+    if table.column("crank_counts").is_some() {
+        out.push((
+            "encoders".to_string(),
+            fig(
+                "encoders, measured and twin",
+                vec![
+                    plot(
+                        table,
+                        "Crank encoder",
+                        "counts",
+                        &[("crank_counts", "measured"), ("twin_crank_counts", "twin")],
+                    ),
+                    plot(
+                        table,
+                        "Shaft encoder (drive direction positive)",
+                        "counts",
+                        &[("shaft_counts", "measured"), ("twin_shaft_counts", "twin")],
+                    ),
+                    plot(
+                        table,
+                        "Residuals (measured - twin)",
+                        "counts",
+                        &[("crank_residual", "crank"), ("shaft_residual", "shaft")],
+                    ),
+                ],
+            ),
+        ));
+    }
     out.push((
         "energy".to_string(),
         fig(

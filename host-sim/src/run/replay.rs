@@ -385,14 +385,16 @@ pub fn simulate_with<T: Real>(
             precision::<T>()
         )));
     }
+    // The run file's `motor_offset` corrects the current sensor's torque (0: as logged).
+    let offset = settings.converter.motor_offset;
     let start = Inputs {
-        motor: MotorInput::Torque(T::c(log.motor[0])),
+        motor: MotorInput::Torque(T::c(log.motor[0] + offset)),
         load: T::c(log.load[0]),
         measured: None,
     };
     // Step k + 1 ends at sample k + 1: what the encoders read there.
     let inputs = |k: usize| Inputs {
-        motor: MotorInput::Torque(T::c(log.motor[k])),
+        motor: MotorInput::Torque(T::c(log.motor[k] + offset)),
         load: T::c(log.load[k]),
         measured: observer.and_then(|_| observed::measurement(log, k + 1)),
     };
