@@ -417,8 +417,7 @@ impl ReplayArgs {
     /// The checked options: the logs read and validated, the run file read (it must
     /// describe the converter).
     pub fn options(&self) -> Result<ReplayOptions, UsageError> {
-        let log_path = parse_path("replay", &self.log)?;
-        let log = BenchLog::read(&log_path).map_err(|e| usage_err(format!("replay: {e}")))?;
+        let log = parse_bench_log("replay", &self.log)?;
         let params = match self.params.as_deref() {
             None => Source::Builtin(ScenarioId::CccS2),
             Some(p) => parse_source("--params", p)?,
@@ -430,17 +429,9 @@ impl ReplayArgs {
                 params.name()
             )));
         }
-        let clutch = match self.clutch_log.as_deref() {
-            None => None,
-            Some(p) => {
-                let path = parse_path("--clutch-log", p)?;
-                let c =
-                    ClutchLog::read(&path).map_err(|e| usage_err(format!("--clutch-log: {e}")))?;
-                Some((path, Arc::new(c)))
-            }
-        };
+        let clutch = parse_clutch_log(self.clutch_log.as_deref())?;
         Ok(ReplayOptions {
-            log: (log_path, Arc::new(log)),
+            log,
             params,
             clutch,
             out: parse_path("--out", &self.out)?,
@@ -483,8 +474,7 @@ impl IdentifyArgs {
     /// The checked options: the logs read and validated, the base run file read (it
     /// must describe the converter with its clutches), the keys known.
     pub fn options(&self) -> Result<IdentifyOptions, UsageError> {
-        let log_path = parse_path("identify", &self.log)?;
-        let log = BenchLog::read(&log_path).map_err(|e| usage_err(format!("identify: {e}")))?;
+        let log = parse_bench_log("identify", &self.log)?;
         let (params, base_text) = match self.params.as_deref() {
             None => (
                 Source::Builtin(ScenarioId::CccS2),
@@ -507,15 +497,7 @@ impl IdentifyArgs {
                 params.name()
             )));
         }
-        let clutch = match self.clutch_log.as_deref() {
-            None => None,
-            Some(p) => {
-                let path = parse_path("--clutch-log", p)?;
-                let c =
-                    ClutchLog::read(&path).map_err(|e| usage_err(format!("--clutch-log: {e}")))?;
-                Some((path, Arc::new(c)))
-            }
-        };
+        let clutch = parse_clutch_log(self.clutch_log.as_deref())?;
         let fit = identifiable::parse_list(self.fit.as_deref().unwrap_or(DEFAULT_FIT))
             .map_err(|e| usage_err(format!("--fit: {e}")))?;
         let max_iters = match self.max_iters.as_deref() {
@@ -530,7 +512,7 @@ impl IdentifyArgs {
             },
         };
         Ok(IdentifyOptions {
-            log: (log_path, Arc::new(log)),
+            log,
             clutch,
             params,
             base_text,
@@ -540,6 +522,23 @@ impl IdentifyArgs {
             quiet: self.quiet,
         })
     }
+}
+
+/// The bench log argument of `command` (`replay`, `identify`): its path and its
+/// contents, read and validated (a missing column or a gap refused, named).
+fn parse_bench_log(command: &str, v: &str) -> Result<(PathBuf, Arc<BenchLog>), UsageError> {
+    let path = parse_path(command, v)?;
+    let log = BenchLog::read(&path).map_err(|e| usage_err(format!("{command}: {e}")))?;
+    Ok((path, Arc::new(log)))
+}
+
+/// `--clutch-log`, when given: its path and the machine's clutch events, read and
+/// validated.
+fn parse_clutch_log(v: Option<&str>) -> Result<Option<(PathBuf, Arc<ClutchLog>)>, UsageError> {
+    let Some(v) = v else { return Ok(None) };
+    let path = parse_path("--clutch-log", v)?;
+    let c = ClutchLog::read(&path).map_err(|e| usage_err(format!("--clutch-log: {e}")))?;
+    Ok(Some((path, Arc::new(c))))
 }
 
 /// The arguments of `host-sim analyze`.

@@ -23,7 +23,7 @@ use super::observed::{self, ObservedSummary, OBSERVER_COLUMNS};
 use super::{overwritten, to_files};
 use crate::error::{report_run_error, usage_err, Fig, RunError};
 use crate::model::bench::{encoder_counts, BenchLog, ClutchEvent, ClutchLog, COUNTS_PER_TURN};
-use crate::model::scenarios::CccScenario;
+use crate::model::scenarios::{CccScenario, Source};
 use crate::options::{precision, ReplayOptions};
 use crate::output::{Cell, Observer};
 use std::cell::Cell as Shared;
@@ -488,15 +488,18 @@ pub fn outputs(out: &Path) -> Vec<PathBuf> {
     vec![out.to_path_buf(), events, switches]
 }
 
+/// The converter settings of a replay's `--params` (a run file that does not describe
+/// the converter is refused by the options already; this names it should one reach here).
+pub fn converter_of(params: &Source) -> Result<CccScenario, RunError> {
+    params.converter().ok_or_else(|| {
+        RunError::Setup(format!("{} does not describe the converter", params.name()))
+    })
+}
+
 /// Runs the replay of `opts` in `f64` to its files ([`to_files`]); the summary names
 /// the logs.
 pub fn run(opts: &ReplayOptions) -> Result<ReplaySummary, RunError> {
-    let settings = opts.params.converter().ok_or_else(|| {
-        RunError::Setup(format!(
-            "{} does not describe the converter",
-            opts.params.name()
-        ))
-    })?;
+    let settings = converter_of(&opts.params)?;
     let targets = outputs(&opts.out);
     let mut inputs: Vec<&Path> = vec![opts.log.0.as_path()];
     if let Some((p, _)) = &opts.clutch {

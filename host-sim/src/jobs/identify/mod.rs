@@ -158,12 +158,7 @@ pub fn run_file_text(opts: &IdentifyOptions, fit: &Fit) -> Result<String, RunErr
 
 /// Runs the identification of `opts` and writes its run file; returns the fit.
 pub fn run(opts: &IdentifyOptions) -> Result<Fit, RunError> {
-    let settings = opts.params.converter().ok_or_else(|| {
-        RunError::Setup(format!(
-            "{} does not describe the converter",
-            opts.params.name()
-        ))
-    })?;
+    let settings = crate::run::replay::converter_of(&opts.params)?;
     let mut inputs: Vec<&Path> = vec![opts.log.0.as_path()];
     if let Some((p, _)) = &opts.clutch {
         inputs.push(p);
