@@ -93,7 +93,7 @@ use slots::Slots;
 /// converter; the mode choice builds its reference model in the one it leaves free
 /// (the core asserts the budgets at compile time: 64 KiB and 32 KiB). A step's
 /// stack high-water is about 14 KiB in f64 and 8.5 KiB in f32 on x86_64 (S2, events
-/// included), 15.7 and 8.8 KiB painted on the Cortex-M boards.
+/// included), 12.9 and 8.3 KiB painted on the Cortex-M boards.
 ///
 /// **Step sizes.** h = 1e-4 s is the reference in f64 (S2's events within 1e-6 s of
 /// h = 5e-5 s); h = 2e-4 s is the recommended f32 step (the largest with no step
@@ -101,7 +101,7 @@ use slots::Slots;
 ///
 /// **In firmware** the twin is far too large for a stack: it lives in a `static` and is
 /// built there by [`Twin::new_in`], which initialises it in place (construction needs
-/// 6.1 KiB of stack on a Cortex-M4F in f32 and 10.6 KiB on a Cortex-M7 in f64, painted
+/// 7.3 KiB of stack on a Cortex-M4F in f32 and 10.8 KiB on a Cortex-M7 in f64, painted
 /// under QEMU, where [`Twin::new`], which returns it by value, needs 219 and 445 KiB).
 /// Only [`Twin::step`] and the outputs are called after that.
 ///
