@@ -27,13 +27,12 @@
 //! autocorrelation ([`correlation_factor`]): quantization of a smooth signal is not
 //! independent from sample to sample.
 
-use crate::error::Sci;
+use crate::error::{RunError, Sci};
 use crate::model::bench::{BenchLog, ClutchLog, COUNTS_PER_TURN};
 use crate::model::identifiable::Param;
 use crate::model::scenarios::CccScenario;
 use crate::output::{Observer, State};
 use crate::run::replay::{self, EncoderLaw, ReplaySummary};
-use crate::RunError;
 use argmin::core::observers::{Observe, ObserverMode};
 use argmin::core::{CostFunction, Error as ArgminError, Executor, State as _, KV};
 use argmin::solver::neldermead::NelderMead;
