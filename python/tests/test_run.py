@@ -139,7 +139,10 @@ def test_the_gil_is_released_during_a_run():
     t = threading.Thread(target=tick)
     t.start()
     t0 = time.monotonic()
-    r = structomat.run("ccc-s2", t_end=5.0)
+    # At 150 N·m S2 never jams (at 800 N·m it does at 0.82 s and the run is over in
+    # ~0.08 s): 5 s of simulated time, 50,000 steps, take ~0.5-1 s here, long enough
+    # for the count of ticks below to tell a released GIL from a held one.
+    r = structomat.run("ccc-s2", t_end=5.0, load=150.0)
     t1 = time.monotonic()
     stop.set()
     t.join()
