@@ -54,10 +54,10 @@ fn value_of(fit: &identify::Fit, key: &str) -> (f64, f64) {
 
 /// Identified from bench1 and its clutch log (the default parameters), the open-loop
 /// replay of bench1 with the identified file reproduces the machine: the same 21
-/// events in the same order, each within 0.5 ms (issue 19's target), and a crank
-/// residual RMS of at most 2.1 counts (issue 19 asks for 2; the fit reaches 2.078 on
-/// x86_64, so this bound is a regression value, from SPEC's 261). The file is a converter run file that `replay
-/// --params` and `run` load; identifying twice writes the same bytes.
+/// events in the same order, each within 0.5 ms, and a crank residual RMS of at most
+/// 2 counts (issue 19's targets; measured on x86_64: 0.585 counts, the largest event
+/// difference 0.38 ms, from SPEC's 261 counts and 2 ms). The file is a converter run
+/// file that `replay --params` and `run` load; identifying twice writes the same bytes.
 #[test]
 #[cfg_attr(debug_assertions, ignore = "release speed: cargo test --release")]
 fn bench1_identified_replays_its_clutch_log() {
@@ -95,7 +95,7 @@ fn bench1_identified_replays_its_clutch_log() {
         panic!("not a replay")
     };
     let s = replay::run(&opts).unwrap_or_else(|e| panic!("{e}"));
-    assert!(s.crank.rms() <= 2.1, "{s}");
+    assert!(s.crank.rms() <= 2.0, "{s}");
     let m = s.matching.as_ref().expect("a clutch log");
     assert_eq!(m.counts(), (21, 21), "{m}");
     assert_eq!(m.first_mismatch(), None, "{m}");

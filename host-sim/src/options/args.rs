@@ -456,7 +456,8 @@ pub struct IdentifyArgs {
     pub params: Option<String>,
     /// The parameters to fit, their run-file keys separated by commas (default
     /// converter.mass, converter.link.1.mass, converter.link.2.mass,
-    /// converter.friction.viscous.A, converter.friction.viscous.B)
+    /// converter.friction.viscous.A, converter.friction.viscous.B,
+    /// converter.friction.viscous.E)
     #[arg(long, value_name = "KEYS")]
     pub fit: Option<String>,
     /// Nelder-Mead's iterations at most, of each of its two searches (default 600)
