@@ -236,7 +236,9 @@ The clutch log (CSV: t, event, from, to; the events and modes in host-sim's name
   crank_jump shaft_jump clutch_slip failed_catch load_bias   1 at a step that raised
                 the diagnostic
   and the summary the innovations' and residuals' RMS and largest (over the run and
-  after its first 20 ms), the corrections' energy and each diagnostic's onsets.";
+  after its first 20 ms), the corrections' energy and each diagnostic's onsets.
+  host-sim plot of that CSV draws encoders (measured and twin) and observer (the
+  innovations, the residual after the update, the diagnostics raised over time).";
 
 /// After the options in `host-sim identify --help`: what is fitted, how, the file.
 pub const IDENTIFY: &str = "\

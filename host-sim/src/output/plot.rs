@@ -307,6 +307,11 @@ fn converter_plots(table: &Table, name: &str) -> Vec<(String, Figure)> {
             ),
         ));
     }
+    // An observed replay's CSV (`host-sim replay --observer`): what the filter saw and
+    // what it named.
+    if let Some(observer) = observer_figure(table) {
+        out.push(("observer".to_string(), fig("observer", observer)));
+    }
     out.push((
         "energy".to_string(),
         fig(
@@ -326,6 +331,55 @@ fn converter_plots(table: &Table, name: &str) -> Vec<(String, Figure)> {
         ),
     ));
     out
+}
+
+/// The diagnostics' columns of an observed replay and their legends.
+const DIAGNOSTICS: [(&str, &str); 5] = [
+    ("crank_jump", "crank encoder jump"),
+    ("shaft_jump", "shaft encoder jump"),
+    ("clutch_slip", "clutch slip"),
+    ("failed_catch", "failed catch"),
+    ("load_bias", "load bias"),
+];
+
+/// An observed replay's panels (`None` without its columns): the crank's innovation
+/// (measured - predicted) beside its residual after the update (measured - corrected
+/// twin), the shaft's innovation since the last mode change, and each diagnostic's
+/// count of steps raised so far (a step line that rises where the diagnostic fires).
+fn observer_figure(table: &Table) -> Option<Vec<Plot>> {
+    let t = table.column("t")?;
+    table.column("crank_innovation")?;
+    let crank = plot(
+        table,
+        "Crank: innovation (measured - predicted), residual (measured - corrected twin)",
+        "counts",
+        &[
+            ("crank_innovation", "innovation"),
+            ("crank_residual", "residual"),
+        ],
+    );
+    let shaft = plot(
+        table,
+        "Shaft innovation since the last mode change (measured - twin)",
+        "counts",
+        &[("shaft_innovation", "shaft")],
+    );
+    let mut raised = Plot::new("Diagnostics raised (steps so far)", "t, s", "steps");
+    for (col, label) in DIAGNOSTICS {
+        let Some(flags) = table.column(col) else {
+            continue;
+        };
+        let counts = flags
+            .iter()
+            .scan(0.0, |n, f| {
+                // 1 where raised; the first row (no step yet) is empty, NaN.
+                *n += if *f > 0.5 { 1.0 } else { 0.0 };
+                Some(*n)
+            })
+            .collect();
+        raised.series.push(Series::new(label, t.to_vec(), counts));
+    }
+    Some(vec![crank, shaft, raised])
 }
 
 /// The mode plot: one band row per mode, lower than the line plots.
@@ -446,6 +500,33 @@ mod tests {
         assert!(Table::from_csv("t,y\n1,2\n3\n")
             .unwrap_err()
             .contains("line 3"));
+    }
+
+    /// An observed replay's figure: the crank's two series as the CSV's columns, each
+    /// diagnostic's running count of the steps that raised it (the first row, no step
+    /// yet, empty), counted here by hand; none without the observer's columns.
+    #[test]
+    fn observer_panels_count_the_diagnostics() {
+        let csv = "t,crank_residual,crank_innovation,crank_sigma,shaft_innovation,\
+crank_jump,shaft_jump,clutch_slip,failed_catch,load_bias
+0,0,,,,,,,,
+0.001,1,2,0.5,0,0,0,0,0,0
+0.002,-1,3,0.5,4,0,0,1,0,0
+0.003,0,0,0.5,0,1,0,1,0,0
+";
+        let t = Table::from_csv(csv).unwrap();
+        let panels = observer_figure(&t).expect("the observer's columns");
+        assert_eq!(panels.len(), 3);
+        assert_eq!(panels[0].series[0].y[1..], [2.0, 3.0, 0.0]);
+        assert_eq!(panels[0].series[1].y, [0.0, 1.0, -1.0, 0.0]);
+        let raised = &panels[2].series;
+        let names: Vec<&str> = raised.iter().map(|s| s.name.as_str()).collect();
+        assert_eq!(names[0], "crank encoder jump");
+        assert_eq!(raised[0].y, [0.0, 0.0, 0.0, 1.0]);
+        assert_eq!(raised[2].y, [0.0, 0.0, 1.0, 2.0]);
+        assert_eq!(raised[4].y, [0.0; 4]);
+        let plain = Table::from_csv("t,crank_residual\n0,1\n").unwrap();
+        assert!(observer_figure(&plain).is_none());
     }
 
     #[test]
