@@ -336,3 +336,43 @@ fn bad_logs_are_named_errors() {
     assert!(err.contains("is the input"), "{err}");
     assert_eq!(std::fs::read_to_string(&copy).unwrap(), good);
 }
+
+/// An output that would overwrite an input of `replay` or `identify` (the bench log,
+/// the clutch log, the `--params` file) is refused before anything is written (exit
+/// status 2), the file and the command named; the input is left as it was.
+#[test]
+fn outputs_that_overwrite_an_input_are_refused() {
+    let dir = TempDir::new("replay-overwrite");
+    let log = dir.join("log.csv");
+    let clutch = dir.join("clutch.csv");
+    let params = dir.join("params.toml");
+    std::fs::copy(data("bench1.csv"), &log).unwrap();
+    std::fs::copy(data("bench1_clutch_log.csv"), &clutch).unwrap();
+    std::fs::write(&params, host_sim::ScenarioId::CccS2.file_text()).unwrap();
+    let before: Vec<Vec<u8>> = [&log, &clutch, &params]
+        .iter()
+        .map(|p| std::fs::read(p).unwrap())
+        .collect();
+    for (command, what) in [("replay", "the replay"), ("identify", "identify")] {
+        for target in [&log, &clutch, &params] {
+            let args = [
+                command,
+                &log,
+                "--clutch-log",
+                &clutch,
+                "--params",
+                &params,
+                "--out",
+                target,
+            ];
+            let (code, _, err) = run(&args);
+            assert_eq!(code, 2, "{command} --out {target}: {err}");
+            let want =
+                format!("the output {target} is the input {target}: {what} would overwrite it");
+            assert!(err.contains(&want), "{want}: {err}");
+        }
+    }
+    for (p, b) in [&log, &clutch, &params].iter().zip(&before) {
+        assert_eq!(&std::fs::read(p).unwrap(), b, "{p} changed");
+    }
+}

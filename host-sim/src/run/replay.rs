@@ -496,26 +496,44 @@ pub fn converter_of(params: &Source) -> Result<CccScenario, RunError> {
     })
 }
 
+/// Refuses outputs `targets` that would overwrite an input of a bench log's command
+/// (`what`: "the replay", "identify"): the log, the clutch log, a `--params` file.
+pub fn refuse_overwrite(
+    log: &Path,
+    clutch: Option<&Path>,
+    params: &Source,
+    targets: &[PathBuf],
+    what: &str,
+) -> Result<(), RunError> {
+    let name = params.name().to_string();
+    let mut inputs: Vec<&Path> = vec![log];
+    inputs.extend(clutch);
+    if params.builtin().is_none() {
+        inputs.push(Path::new(&name));
+    }
+    match overwritten(&inputs, targets) {
+        Some((out, input)) => Err(RunError::Usage(usage_err(format!(
+            "the output {} is the input {}: {what} would overwrite it; name another file",
+            out.display(),
+            input.display()
+        )))),
+        None => Ok(()),
+    }
+}
+
 /// Runs the replay of `opts` in `f64` to its files ([`to_files`]); the summary names
 /// the logs.
 pub fn run(opts: &ReplayOptions) -> Result<ReplaySummary, RunError> {
     let settings = converter_of(&opts.params)?;
     let targets = outputs(&opts.out);
-    let mut inputs: Vec<&Path> = vec![opts.log.0.as_path()];
-    if let Some((p, _)) = &opts.clutch {
-        inputs.push(p);
-    }
     let params = opts.params.name().to_string();
-    if opts.params.builtin().is_none() {
-        inputs.push(Path::new(&params));
-    }
-    if let Some((out, input)) = overwritten(&inputs, &targets) {
-        return Err(RunError::Usage(usage_err(format!(
-            "the output {} is the input {}: the replay would overwrite it; name another file",
-            out.display(),
-            input.display()
-        ))));
-    }
+    refuse_overwrite(
+        &opts.log.0,
+        opts.clutch.as_ref().map(|(p, _)| p.as_path()),
+        &opts.params,
+        &targets,
+        "the replay",
+    )?;
     let clutch = opts.clutch.as_ref().map(|(_, c)| &**c);
     let observer = opts.observer.then(ObserverSettings::reference);
     let mut summary = to_files(&targets, |mut csv| {

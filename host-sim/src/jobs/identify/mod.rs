@@ -9,14 +9,13 @@ pub mod fit;
 
 pub use fit::{fit, Fit, Identified, Problem};
 
-use crate::error::{report_run_error, usage_err, Fig, RunError, Sci};
+use crate::error::{report_run_error, Fig, RunError, Sci};
 use crate::model::runfile::{parse_value, run_file_from_value, set_dotted};
 use crate::options::IdentifyOptions;
 use crate::run::converter::End;
-use crate::run::overwritten;
+use crate::run::replay;
 use std::fmt;
 use std::io::Write;
-use std::path::Path;
 
 impl fmt::Display for Fit {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
@@ -158,23 +157,16 @@ pub fn run_file_text(opts: &IdentifyOptions, fit: &Fit) -> Result<String, RunErr
 
 /// Runs the identification of `opts` and writes its run file; returns the fit.
 pub fn run(opts: &IdentifyOptions) -> Result<Fit, RunError> {
-    let settings = crate::run::replay::converter_of(&opts.params)?;
-    let mut inputs: Vec<&Path> = vec![opts.log.0.as_path()];
-    if let Some((p, _)) = &opts.clutch {
-        inputs.push(p);
-    }
+    let settings = replay::converter_of(&opts.params)?;
     let params = opts.params.name().to_string();
-    if opts.params.builtin().is_none() {
-        inputs.push(Path::new(&params));
-    }
     let targets = [opts.out.clone()];
-    if let Some((out, input)) = overwritten(&inputs, &targets) {
-        return Err(RunError::Usage(usage_err(format!(
-            "the output {} is the input {}: identify would overwrite it; name another file",
-            out.display(),
-            input.display()
-        ))));
-    }
+    replay::refuse_overwrite(
+        &opts.log.0,
+        opts.clutch.as_ref().map(|(p, _)| p.as_path()),
+        &opts.params,
+        &targets,
+        "identify",
+    )?;
     let problem = Problem::new(
         &params,
         settings,
