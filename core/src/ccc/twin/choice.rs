@@ -364,8 +364,8 @@ impl<T: Real> Twin<T> {
 /// The candidate modes at event `kind` from mode `from`, with their [`preference`],
 /// most preferred first (ties in the enumeration order): each lever that touches the
 /// shaft (its speed `shaft`, to `tol_w`), holds, or is caught, free or holding; the
-/// shaft held, if it may be, or turning (with no lever only if it has inertia:
-/// `with_shaft`, [`Mode::Coast`]).
+/// shaft held, if it may be, or turning (with no lever, [`Mode::Coast`], only if it
+/// has inertia, `with_shaft`, and turns: a standing shaft with no lever is held).
 fn candidate_modes<T: Real>(
     from: Mode,
     kind: EventKind,
@@ -406,7 +406,7 @@ fn candidate_modes<T: Real>(
                 let Some(m) = Mode::from_clutches([c6, c8], turning) else {
                     continue;
                 };
-                if m == Mode::Coast && !with_shaft {
+                if m == Mode::Coast && !(with_shaft && shaft.abs() > tol_w) {
                     continue;
                 }
                 if !cands.iter().any(|(_, x)| *x == m) {

@@ -108,6 +108,12 @@ impl<T: Real> Twin<T> {
         self.shaft_at(self.slots.cur().mode, &self.links, self.t)
     }
 
+    /// Shaft acceleration, rad/s², CCW positive (0 while held; the coasting shaft's
+    /// own under its brake and drag in [`Mode::Coast`]).
+    pub fn shaft_acceleration(&self) -> T {
+        self.shaft_alpha(self.slots.cur().mode, &self.links)
+    }
+
     /// Shaft angle turned since the start, rad, CCW positive.
     pub fn shaft_angle(&self) -> T {
         self.shaft_angle
