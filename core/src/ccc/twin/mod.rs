@@ -90,7 +90,7 @@ use slots::Slots;
 /// a step); no indexing on the step path can panic, and a failed step returns an error
 /// and keeps the last good state.
 ///
-/// **Size.** `size_of::<Twin<f64>>()` is 63 552 B (62.1 KiB), `Twin<f32>` 32 752 B
+/// **Size.** `size_of::<Twin<f64>>()` is 63 576 B (62.1 KiB), `Twin<f32>` 32 760 B
 /// (32.0 KiB) on x86_64: three slots, each a model and a workspace sized for the
 /// converter; the mode choice builds its reference model in the one it leaves free
 /// (the core asserts the budgets at compile time: 64 KiB and 32 KiB). A step's
