@@ -526,8 +526,9 @@ fn every_mode_transmission_functions_match_finite_differences() {
             checked += 1;
         }
     }
-    // 4 two-DOF modes × 3 choices, I6 and I8 × 3, A68 × 2 (lever, crank), jam.
-    assert_eq!(checked, 4 * 3 + 2 * 3 + 2 + 1);
+    // 5 two-DOF modes (free, I0, A6, A8, coast) × 3 choices, I6 and I8 × 3, A68 × 2
+    // (lever, crank), jam.
+    assert_eq!(checked, 5 * 3 + 2 * 3 + 2 + 1);
 }
 
 fn s2(h: f64, t_end: f64, drive: DriveDirection) -> Run {

@@ -361,8 +361,7 @@ fn twin_error_time(e: &TwinStepError) -> Option<f64> {
         | TwinStepError::Model { time, .. }
         | TwinStepError::Mechanism { time, .. }
         | TwinStepError::Diverged { time, .. }
-        | TwinStepError::Diode { time, .. }
-        | TwinStepError::Coasting { time } => Some(*time),
+        | TwinStepError::Diode { time, .. } => Some(*time),
     }
 }
 

@@ -108,7 +108,8 @@ macro_rules! bar {
 pub const MODE_DESCRIPTION: &str = "the converter's mode (SPEC 3): 0 free (no clutch), \
 1 I0 (shaft held, both levers overrunning), 2 I6 (shaft held, lever 6 locked), 3 I8 \
 (shaft held, lever 8 locked), 4 jam (both levers locked), 5 A6 (shaft turning with lever \
-6), 6 A8 (shaft turning with lever 8), 7 A68 (shaft turning with both levers)";
+6), 6 A8 (shaft turning with lever 8), 7 A68 (shaft turning with both levers), 8 coast \
+(shaft turning with no lever: only with shaft inertia)";
 
 const LINKS: [[Variable; 3]; 8] = [
     bar!(1, "crank A-B"),

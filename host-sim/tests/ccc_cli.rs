@@ -129,8 +129,8 @@ fn state_header() -> String {
 const EVENTS_HEADER: &str = "time,event,from,to,c6,c8,impact_loss,mismatch";
 const SWITCHES_HEADER: &str = "time,mode,from,to,conditioning_before,conditioning_after";
 
-/// Mode names, in `mode_code` order (0..7), and their degrees of freedom.
-const MODES: [(&str, usize); 8] = [
+/// Mode names, in `mode_code` order (0..8), and their degrees of freedom.
+const MODES: [(&str, usize); 9] = [
     ("free", 2),
     ("I0", 2),
     ("I6", 1),
@@ -139,6 +139,7 @@ const MODES: [(&str, usize); 8] = [
     ("A6", 2),
     ("A8", 2),
     ("A68", 1),
+    ("coast", 2),
 ];
 
 const EVENT_NAMES: [&str; 8] = [

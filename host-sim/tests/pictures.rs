@@ -178,7 +178,7 @@ fn converter_plots_are_well_formed_svg_and_png() {
     }
     // The mode plot names every mode on its axis.
     let svg = String::from_utf8(read(&plots.join("mode.svg"))).expect("utf-8");
-    for m in ["free", "I0", "I6", "I8", "jam", "A6", "A8", "A68"] {
+    for m in ["free", "I0", "I6", "I8", "jam", "A6", "A8", "A68", "coast"] {
         assert!(svg.contains(&format!(">{m}</text>")), "{m}");
     }
 }

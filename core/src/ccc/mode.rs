@@ -33,11 +33,17 @@ pub enum Mode {
     A8,
     /// Shaft turning with both levers, 1 DOF.
     A68,
+    /// Shaft turning with no lever (only with shaft inertia J_s > 0, SPEC 5): both
+    /// levers overrunning, the linkage moves as in I0 (2 DOF) and the shaft coasts on
+    /// its own, `J_s·ω̇_s = −T_r` (the brake opposing its turning) plus the overrunning
+    /// levers' clutch drag. Its speed and angle are the twin's, not the model's: the
+    /// mode's model is I0's.
+    Coast,
 }
 
 impl Mode {
     /// All modes, in a fixed order (for reports and tests).
-    pub const ALL: [Mode; 8] = [
+    pub const ALL: [Mode; 9] = [
         Mode::Free,
         Mode::I0,
         Mode::I6,
@@ -46,13 +52,14 @@ impl Mode {
         Mode::A6,
         Mode::A8,
         Mode::A68,
+        Mode::Coast,
     ];
 
     /// The clutches of levers 6 and 8.
     pub fn clutches(self) -> [Clutch; 2] {
         use Clutch::*;
         match self {
-            Mode::Free | Mode::I0 => [Free, Free],
+            Mode::Free | Mode::I0 | Mode::Coast => [Free, Free],
             Mode::I6 => [Locked, Free],
             Mode::I8 => [Free, Locked],
             Mode::Jam => [Locked, Locked],
@@ -64,7 +71,8 @@ impl Mode {
 
     /// The mode with these clutches (`turning`: the shaft turns); `None` for a
     /// combination that is no mode (a lever locked against a turning shaft, one engaged
-    /// with a held one, or a turning shaft with no lever).
+    /// with a held one). A turning shaft with no lever is [`Mode::Coast`], a mode only
+    /// with shaft inertia: the mode choice offers it only then.
     pub fn from_clutches(c: [Clutch; 2], turning: bool) -> Option<Mode> {
         use Clutch::*;
         Some(match (c, turning) {
@@ -75,19 +83,20 @@ impl Mode {
             ([Engaged, Free], true) => Mode::A6,
             ([Free, Engaged], true) => Mode::A8,
             ([Engaged, Engaged], true) => Mode::A68,
+            ([Free, Free], true) => Mode::Coast,
             _ => return None,
         })
     }
 
     /// Whether the shaft turns.
     pub fn shaft_turning(self) -> bool {
-        matches!(self, Mode::A6 | Mode::A8 | Mode::A68)
+        matches!(self, Mode::A6 | Mode::A8 | Mode::A68 | Mode::Coast)
     }
 
     /// Degrees of freedom.
     pub fn dof(self) -> usize {
         match self {
-            Mode::Free | Mode::I0 | Mode::A6 | Mode::A8 => 2,
+            Mode::Free | Mode::I0 | Mode::A6 | Mode::A8 | Mode::Coast => 2,
             Mode::I6 | Mode::I8 | Mode::A68 => 1,
             Mode::Jam => 0,
         }
@@ -97,14 +106,16 @@ impl Mode {
     pub fn coordinate_choices(self) -> &'static [Coordinates] {
         use Coordinates::*;
         match self {
-            Mode::Free | Mode::I0 | Mode::A6 | Mode::A8 => &[CrankSwing, CrankCoupler, SwingRocker],
+            Mode::Free | Mode::I0 | Mode::A6 | Mode::A8 | Mode::Coast => {
+                &[CrankSwing, CrankCoupler, SwingRocker]
+            }
             Mode::I6 | Mode::I8 => &[Swing, Crank, Rod],
             Mode::A68 => &[Lever, Crank],
             Mode::Jam => &[Rest],
         }
     }
 
-    /// A small stable code (0..8) for CSV columns.
+    /// A small stable code (0..9, `Mode::ALL`'s order) for CSV columns.
     pub fn code(self) -> u8 {
         Mode::ALL.iter().position(|m| *m == self).unwrap_or(0) as u8
     }
@@ -120,6 +131,7 @@ impl Mode {
             Mode::A6 => "A6",
             Mode::A8 => "A8",
             Mode::A68 => "A68",
+            Mode::Coast => "coast",
         }
     }
 }

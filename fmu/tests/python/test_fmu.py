@@ -60,7 +60,7 @@ def test_every_output_is_described(fmu_path):
     assert outputs == set(COLUMNS)
     mode = next(v for v in md.modelVariables if v.name == "mode")
     assert mode.type == "Integer"
-    for code, name in enumerate(["free", "I0", "I6", "I8", "jam", "A6", "A8", "A68"]):
+    for code, name in enumerate(["free", "I0", "I6", "I8", "jam", "A6", "A8", "A68", "coast"]):
         assert f"{code} {name}" in mode.description
     inputs = {v.name: float(v.start) for v in md.modelVariables if v.causality == "input"}
     assert inputs == {"motor_torque": 12.0, "load_torque": 800.0}

@@ -37,8 +37,10 @@ CSV columns (one row at t = 0, then one per written step):
 
 Converter scenarios (ccc-s1: free mode, h = 1e-4 s, t_end = 1 s; ccc-s2: h = 1e-4 s,
 t_end = 1 s): a row at t = 0, every N-th step and the last state, columns
-  t mode mode_code coords       time, s; mode name (free I0 I6 I8 jam A6 A8 A68), its
-                                code 0..7 in that order, the independent coordinates
+  t mode mode_code coords       time, s; mode name (free I0 I6 I8 jam A6 A8 A68 coast),
+                                its code 0..8 in that order (coast: the shaft turning
+                                with no lever, only with shaft_inertia > 0), the
+                                independent coordinates
   q1 q2 qd1 qd2                 coordinates (rad) and speeds (rad/s); empty past the
                                 mode's DOF (q2 in 1-DOF modes, all four in jam)
   theta{p} omega{p}             angle (rad, unwrapped) and speed (rad/s) of link p = 1..8
@@ -274,7 +276,8 @@ structomat-fmu -p host-sim`, or give --lib) and resources/start.txt.
                (initial.crank_deg, ...) and clutch, ccw, branch_c/g/i_left: fixed at
                initialization, their start values the converter's of the options
   inputs       motor_torque, load_torque (N·m), held over a communication step
-  outputs      mode (Integer: 0 free, 1 I0, 2 I6, 3 I8, 4 jam, 5 A6, 6 A8, 7 A68),
+  outputs      mode (Integer: 0 free, 1 I0, 2 I6, 3 I8, 4 jam, 5 A6, 6 A8, 7 A68,
+               8 coast),
                crank_angle, crank_speed, shaft_angle, shaft_speed, c6, c8, audit.kinetic,
                audit.potential, audit.motor_work, audit.load_work, audit.impact_loss,
                audit.residual

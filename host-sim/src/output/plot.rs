@@ -139,8 +139,9 @@ fn plot(table: &Table, title: &str, y_label: &str, cols: &[(&str, &str)]) -> Plo
 }
 
 /// The colours of the modes in the mode plot, by mode code (free, I0, I6, I8, jam, A6,
-/// A8, A68): the held-shaft modes in cool colours, the turning ones warm, jam black.
-pub const MODE_COLORS: [Color; 8] = [
+/// A8, A68, coast): the held-shaft modes in cool colours, the turning ones warm (the
+/// coasting shaft, with no lever, a pale one), jam black.
+pub const MODE_COLORS: [Color; 9] = [
     Color::rgb(150, 150, 150),
     Color::rgb(86, 180, 233),
     Color::rgb(0, 114, 178),
@@ -149,6 +150,7 @@ pub const MODE_COLORS: [Color; 8] = [
     Color::rgb(230, 159, 0),
     Color::rgb(213, 94, 0),
     Color::rgb(204, 121, 167),
+    Color::rgb(240, 228, 66),
 ];
 
 fn converter_plots(table: &Table, name: &str) -> Vec<(String, Figure)> {

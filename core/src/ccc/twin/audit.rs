@@ -4,7 +4,7 @@ use super::super::build::physical_link;
 use super::super::params::CccParams;
 use super::error::{Failure, TwinStepError};
 use super::slot::{LinkState, W_LOAD, W_MOTOR};
-use super::{shaft_speed, Twin, Work};
+use super::{Twin, Work};
 use crate::error::{GroupFault, StepError};
 use crate::scalar::{perp, rotate_cs, Real, Vec2};
 
@@ -106,7 +106,7 @@ pub(super) fn audit_finite<T: Real>(a: &Audit<T>, t: T) -> Result<(), TwinStepEr
 impl<T: Real> Twin<T> {
     /// The audit at the end of a step in `w` (the slot holds its evaluation).
     pub(super) fn audit_of(&self, links: &[LinkState<T>; 9], w: &Work<T>) -> Audit<T> {
-        let shaft = shaft_speed(self.slots.cur().mode, links);
+        let shaft = self.shaft_at(self.slots.cur().mode, links, w.t);
         let frames = self.slots.cur().frames();
         let (kinetic, potential) = physical_energy(&self.params, links, &frames, shaft);
         Audit {

@@ -63,6 +63,8 @@ impl<T: Real> Twin<T> {
         };
         let links = cand.links(params);
         let c = clear.unwrap_or_else(|| cand.clutch_torques(params, &links));
+        let shaft = self.coast.omega;
+        let coast = [shaft, self.coast_accel(&links, shaft, inputs.load)];
         crate::trace::debug!(
             "candidate {m}: c = {:?}, alpha6 = {:?}, alpha8 = {:?}",
             c,
@@ -70,7 +72,7 @@ impl<T: Real> Twin<T> {
             links[8].alpha,
         );
         Ok(Candidate {
-            violation: self.violation(m, from, &c, &links, inputs, tol_w),
+            violation: self.violation(m, from, &c, &links, inputs, tol_w, coast),
             screened: clear,
             speed_gap,
             place,
@@ -263,7 +265,8 @@ impl<T: Real> Twin<T> {
         load: &Load<'_, T>,
     ) -> Option<T> {
         let time = w.t.to_f64();
-        let (drive, lossy) = (self.drive, self.lossy);
+        // A coasting candidate's shaft turns at its speed at the event.
+        let (drive, lossy, shaft) = (self.drive, self.lossy, self.coast.omega);
         let (cand, params) = self.scratch(w.switched);
         let q = match cand.reposition(params, m, coords, load.pose, time) {
             Ok(q) => q,
@@ -284,6 +287,7 @@ impl<T: Real> Twin<T> {
                 load.inputs,
                 drive,
                 lossy.then_some(&params.friction),
+                shaft,
             )
             .is_err()
         {

@@ -4,6 +4,7 @@
 use super::super::build::BRANCHES;
 use super::super::mode::{Clutch, Mode};
 use super::candidate::{Candidate, Place};
+use super::coast::Coast;
 use super::coordinates::best_slot;
 use super::error::TwinStepError;
 use super::evaluate::{Stage, Torques};
@@ -14,7 +15,7 @@ use super::settings::*;
 use super::slot::unwrap_near;
 use super::slot::{LinkState, QD, STATE};
 use super::slots::Slots;
-use super::{joint_gap, shaft_speed, shaft_turn, Twin, Work};
+use super::{joint_gap, shaft_turn, Twin, Work};
 use crate::scalar::Real;
 use nalgebra::{SMatrix, SVector};
 
@@ -52,14 +53,24 @@ impl<T: Real> Twin<T> {
         let from = self.slots.cur().mode;
         let pose = self.slot_links_unwrapped();
         let links = self.slots.cur().links(&self.params);
+        // A coasting shaft's motion up to the event booked; its speed there is the one
+        // a candidate that leaves the shaft coasting starts from (no constraint moves
+        // it), the candidates' acceleration then their own.
+        self.coast_to(w, w.t, self.coast.accel);
+        let shaft = self.shaft_at(from, &links, w.t);
+        self.coast = Coast {
+            t0: w.t,
+            omega: shaft,
+            accel: self.coast.accel,
+        };
         if w.audit_at_events {
             // A finer rung would redo the step, this event and its choice: stop here
             // if the state at the event already breaks the energy balance.
             self.balance_within(w, &links, T::c(EVENT_AUDIT_MARGIN))?;
         }
-        let shaft = shaft_speed(from, &links);
         let tol_w = speed_tol::<T>() * speed_scale(&links);
-        let cands = candidate_modes(from, kind, &links, shaft, tol_w);
+        let with_shaft = self.params.shaft_inertia > T::zero();
+        let cands = candidate_modes(from, kind, &links, shaft, tol_w, with_shaft);
         let space = self.momentum_space(w, &pose, &links, shaft, inputs)?;
         let judge = Judge {
             kind,
@@ -115,6 +126,7 @@ impl<T: Real> Twin<T> {
                 inputs,
                 self.drive,
                 self.lossy.then_some(&self.params.friction),
+                T::zero(),
             )
             .map_err(|e| self.physical_error(e))?;
         let js = self.params.shaft_inertia;
@@ -276,10 +288,6 @@ impl<T: Real> Twin<T> {
             cand,
             consistent,
         } = pick;
-        let with_shaft = self.params.shaft_inertia > T::zero();
-        if m.shaft_turning() && with_shaft && m.clutches().iter().all(|c| *c == Clutch::Free) {
-            return Err(TwinStepError::Coasting { time });
-        }
         // The candidate slot holds the chosen mode, evaluated: take it. If that was the
         // reference model, its slot takes the scratch's role first (no copy).
         if cand.place == Place::Reference {
@@ -307,6 +315,10 @@ impl<T: Real> Twin<T> {
             self.restart_at(w, inputs)?;
         }
         let after = self.slots.cur().links(&self.params);
+        if m == Mode::Coast {
+            // The shaft coasts from its speed at the event under its own torque.
+            self.coast.accel = self.coast_accel(&after, self.coast.omega, inputs.load);
+        }
         let position_gap = joint_gap(&self.params, links, &after);
         crate::trace::info!(
             "t = {time:.6} s: {} -> {m} ({}, {} coordinates, impact loss {loss:?} J)",
@@ -352,13 +364,15 @@ impl<T: Real> Twin<T> {
 /// The candidate modes at event `kind` from mode `from`, with their [`preference`],
 /// most preferred first (ties in the enumeration order): each lever that touches the
 /// shaft (its speed `shaft`, to `tol_w`), holds, or is caught, free or holding; the
-/// shaft held, if it may be, or turning.
+/// shaft held, if it may be, or turning (with no lever, [`Mode::Coast`], only if it
+/// has inertia, `with_shaft`, and turns: a standing shaft with no lever is held).
 fn candidate_modes<T: Real>(
     from: Mode,
     kind: EventKind,
     links: &[LinkState<T>; 9],
     shaft: T,
     tol_w: T,
+    with_shaft: bool,
 ) -> heapless::Vec<(u8, Mode), 8> {
     // Which levers touch the shaft (may lock or engage), and the shaft's options.
     let mut contact = [false; 2];
@@ -392,6 +406,9 @@ fn candidate_modes<T: Real>(
                 let Some(m) = Mode::from_clutches([c6, c8], turning) else {
                     continue;
                 };
+                if m == Mode::Coast && !(with_shaft && shaft.abs() > tol_w) {
+                    continue;
+                }
                 if !cands.iter().any(|(_, x)| *x == m) {
                     let _ = cands.push((preference(from, m, kind), m));
                 }

@@ -42,7 +42,9 @@ impl<T: Real> Twin<T> {
     /// conditions, each relative to its scale (0: consistent): c_k ≥ 0 for a locked or
     /// engaged lever, Σc_k ≤ T_r over the locked ones, a free lever touching the shaft
     /// does not accelerate past it in the drive direction, a shaft starting from rest
-    /// accelerates in the drive direction.
+    /// accelerates in the drive direction. `coast`: the shaft's speed (rad/s) and
+    /// acceleration (rad/s²) if `m` is [`Mode::Coast`] (no lever carries it).
+    #[allow(clippy::too_many_arguments)]
     pub(super) fn violation(
         &self,
         m: Mode,
@@ -51,13 +53,24 @@ impl<T: Real> Twin<T> {
         links: &[LinkState<T>; 9],
         inputs: &Inputs<T>,
         tol_w: T,
+        coast: [T; 2],
     ) -> T {
         let d = self.drive;
         let torque_scale = inputs.load + T::c(1.0) + c[0].abs() + c[1].abs();
         let tol_c = torque_tol(torque_scale);
         let alpha_scale = links.iter().fold(T::one(), |a, s| a.max(s.alpha.abs()));
         let tol_a = T::c(1e-9) * alpha_scale;
-        let shaft_alpha = shaft_accel(m, links);
+        let coasting = m == Mode::Coast;
+        let shaft_alpha = if coasting {
+            coast[1]
+        } else {
+            shaft_accel(m, links)
+        };
+        let shaft_w = if coasting {
+            coast[0]
+        } else {
+            shaft_speed(m, links)
+        };
         let mut v = T::zero();
         let mut locked = T::zero();
         for (k, ((_, lever), clutch)) in BRANCHES.iter().zip(m.clutches()).enumerate() {
@@ -77,7 +90,7 @@ impl<T: Real> Twin<T> {
                         // Its drag on the held shaft, which the brake holds as well.
                         locked += d * drag * l.omega;
                     }
-                    let rel_w = l.omega - shaft_speed(m, links);
+                    let rel_w = l.omega - shaft_w;
                     if rel_w.abs() <= tol_w {
                         let rel = d * (l.alpha - shaft_alpha);
                         v += (rel - tol_a).max(T::zero()) / alpha_scale;
@@ -106,7 +119,9 @@ impl<T: Real> Twin<T> {
             v[0] * u_plus[0] + v[1] * u_plus[1]
         };
         let clutches = m.clutches();
-        let ws = if m.shaft_turning() {
+        let ws = if m == Mode::Coast {
+            u_plus[2]
+        } else if m.shaft_turning() {
             BRANCHES
                 .iter()
                 .zip(clutches.iter())
@@ -178,6 +193,7 @@ impl<T: Real> Twin<T> {
                     inputs,
                     d,
                     self.lossy.then_some(&self.params.friction),
+                    T::zero(),
                 )
                 .is_err()
             {
@@ -205,7 +221,8 @@ impl<T: Real> Twin<T> {
             l.omega = v[0] * u_plus[0] + v[1] * u_plus[1];
             l.alpha = v[0] * x[0] + v[1] * x[1] + r.alpha_bias(p);
         }
-        Some((self.violation(m, from, &c, &links, inputs, tol_w), c))
+        let coast = [u_plus[2], x[2]];
+        Some((self.violation(m, from, &c, &links, inputs, tol_w, coast), c))
     }
 
     /// The reference's KKT system with mode `m`'s clutches as constraints on the
@@ -314,7 +331,7 @@ mod tests {
         let at_rest = [LinkState::default(); 9];
         let close = |a: f64, b: f64| (a - b).abs() <= 1e-8 * (1.0 + b.abs());
         let v = |m, from, c: [f64; 2], l: &[LinkState<f64>; 9], load| {
-            tw.violation(m, from, &c, l, &inputs(load), tol_w)
+            tw.violation(m, from, &c, l, &inputs(load), tol_w, [0.0; 2])
         };
         // A locked lever (I6): c6 = +5 N·m holds, c6 = -5 N·m pulls: violates by 5/106.
         assert_eq!(v(Mode::I6, Mode::I0, [5.0, 0.0], &at_rest, 100.0), 0.0);

@@ -6,6 +6,7 @@ use super::super::build::{initial_pose, CRANK};
 use super::super::mode::Mode;
 use super::super::params::CccParams;
 use super::audit::{audit_finite, Audit};
+use super::coast::Coast;
 use super::coordinates::best_slot;
 use super::error::{TwinSetupError, TwinStepError};
 use super::evaluate::TorqueSource;
@@ -61,6 +62,7 @@ impl<T: Real> Twin<T> {
             inputs: Held::of(&inputs),
             links: [LinkState::default(); 9],
             shaft_angle: T::zero(),
+            coast: Coast::default(),
             c: [T::zero(); 2],
             joints: [Vec2::zeros(); 11],
             guards: Guards::NONE,
@@ -148,6 +150,7 @@ impl<T: Real> Twin<T> {
             addr_of_mut!((*p).inputs).write(Held::of(&inputs));
             addr_of_mut!((*p).links).write([LinkState::default(); 9]);
             addr_of_mut!((*p).shaft_angle).write(T::zero());
+            addr_of_mut!((*p).coast).write(Coast::default());
             addr_of_mut!((*p).c).write([T::zero(); 2]);
             addr_of_mut!((*p).joints).write([Vec2::zeros(); 11]);
             addr_of_mut!((*p).guards).write(Guards::NONE);
@@ -250,6 +253,7 @@ fn fields_of<T: Real>(t: &Twin<T>) {
         inputs: _,
         links: _,
         shaft_angle: _,
+        coast: _,
         c: _,
         joints: _,
         guards: _,

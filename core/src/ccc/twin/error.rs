@@ -133,11 +133,6 @@ pub enum TwinStepError {
         /// limit); `time` if none closes at its rate.
         at: f64,
     },
-    /// A turning shaft with J_s > 0 would leave both levers and coast: not modelled.
-    Coasting {
-        /// Time, s.
-        time: f64,
-    },
 }
 
 /// A value as an error message gives it: in words when it is not finite.
@@ -269,10 +264,6 @@ impl fmt::Display for TwinStepError {
                 worst.fault
             ),
             TwinStepError::Diode { .. } => self.fmt_diode(f),
-            TwinStepError::Coasting { time } => write!(
-                f,
-                "t = {time:.6} s: the shaft would coast free of both levers (J_s > 0), which is not modelled"
-            ),
         }
     }
 }

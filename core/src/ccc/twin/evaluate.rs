@@ -83,7 +83,7 @@ impl<T: Real> Twin<T> {
             Torques::Screened(c) => Some(c),
             // The torque functions from the start's clutch torques: as at the start.
             Torques::DeferAtSpeedEvent(g0, h) => (self.torques_can_wait(g0, h) && {
-                let g = self.guards_of(self.slots.cur(), &links, &self.c, inputs);
+                let g = self.guards_of(self.slots.cur(), &links, &self.c, inputs, w.t);
                 g0.fired(&g).any_speed()
             })
             .then_some(self.c),
@@ -91,7 +91,7 @@ impl<T: Real> Twin<T> {
         if stage <= Stage::Reactions && kept.is_none() {
             self.stage_reactions(w)?;
         }
-        Ok(self.readout(&links, inputs, kept))
+        Ok(self.readout(&links, inputs, kept, w.t))
     }
 
     /// [`Stage::Motion`]: the slot's equations of motion at `w`'s state.
@@ -104,6 +104,7 @@ impl<T: Real> Twin<T> {
                 inputs,
                 self.drive,
                 self.lossy.then_some(&self.params.friction),
+                self.coast.omega_at(w.t),
             )
             .map_err(|e| self.physical_error(e))
     }
@@ -116,12 +117,13 @@ impl<T: Real> Twin<T> {
 
     /// [`Stage::Readout`]: the clutch torques (`kept`, or the slot's from its
     /// kinetostatics) and the event functions and their rates at the slot's physical
-    /// `links`.
+    /// `links` (at time `t`).
     fn readout(
         &mut self,
         links: &[LinkState<T>; 9],
         inputs: &Inputs<T>,
         kept: Option<[T; 2]>,
+        t: T,
     ) -> TorqueSource {
         self.torque_source = if kept.is_some() {
             TorqueSource::Kept
@@ -129,7 +131,7 @@ impl<T: Real> Twin<T> {
             TorqueSource::Kinetostatics
         };
         self.c = kept.unwrap_or_else(|| self.slots.cur().clutch_torques(&self.params, links));
-        self.guards = self.guards_of(self.slots.cur(), links, &self.c, inputs);
+        self.guards = self.guards_of(self.slots.cur(), links, &self.c, inputs, t);
         self.guard_rates = self.guard_rates_of(self.slots.cur(), links);
         self.torque_source
     }
@@ -156,6 +158,7 @@ impl<T: Real> Twin<T> {
             inputs,
             self.drive,
             self.lossy.then_some(&self.params.friction),
+            self.coast.omega_at(w.t),
         );
         self.dp5.seed(w.t, &w.y, &k1);
     }

@@ -7,7 +7,7 @@ use super::super::mode::{Clutch, Mode};
 use super::inputs::Inputs;
 use super::settings::*;
 use super::slot::{LinkState, Slot};
-use super::{shaft_accel, shaft_speed, Twin};
+use super::Twin;
 use crate::scalar::Real;
 
 /// Ulps of the largest link speed by which a free lever must pass the shaft for a catch
@@ -318,7 +318,7 @@ impl<T: Real> Twin<T> {
         }
         let d = self.drive;
         let mode = slot.mode;
-        let shaft = shaft_accel(mode, links);
+        let shaft = self.shaft_alpha(mode, links);
         for (k, ((_, lever), clutch)) in BRANCHES.iter().zip(mode.clutches()).enumerate() {
             if clutch == Clutch::Free {
                 *r.get_mut(Guard::catch(k)) =
@@ -331,13 +331,14 @@ impl<T: Real> Twin<T> {
         r
     }
 
-    /// The event functions of `slot`'s mode at its evaluated state.
+    /// The event functions of `slot`'s mode at its evaluated state (time `t`).
     pub(super) fn guards_of(
         &self,
         slot: &Slot<T>,
         links: &[LinkState<T>; 9],
         c: &[T; 2],
         inputs: &Inputs<T>,
+        t: T,
     ) -> Guards<T> {
         let mut g = Guards::NONE;
         if !self.settings.clutch {
@@ -345,7 +346,7 @@ impl<T: Real> Twin<T> {
         }
         let d = self.drive;
         let mode = slot.mode;
-        let shaft = shaft_speed(mode, links);
+        let shaft = self.shaft_at(mode, links, t);
         let mut locked = T::zero();
         let mut any_locked = false;
         // A release fires when c_k falls below -1e-9 (T_r + 1 N·m) (f32: see torque_tol),

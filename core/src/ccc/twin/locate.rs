@@ -354,7 +354,7 @@ impl<T: Real> Twin<T> {
                 .eval_speeds(w.t, &w.y)
                 .map_err(|e| self.physical_error(e))?;
             let links = self.slots.cur().links(&self.params);
-            self.guards = self.guards_of(self.slots.cur(), &links, &self.c, inputs);
+            self.guards = self.guards_of(self.slots.cur(), &links, &self.c, inputs, t);
         } else {
             self.evaluate_from(Stage::Motion, w, inputs, Torques::Kinetostatics)?;
         }

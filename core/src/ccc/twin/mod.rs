@@ -22,6 +22,7 @@ mod audit;
 mod candidate;
 mod capacity;
 mod choice;
+mod coast;
 mod consistency;
 mod construction;
 mod coordinates;
@@ -58,6 +59,7 @@ use crate::integrator::Dp5;
 use crate::motor::Motor;
 use crate::scalar::{Real, Vec2};
 use crate::workspace::WarmStart;
+use coast::{lever_driven, Coast};
 use evaluate::{Stage, TorqueSource, Torques};
 use guards::Guards;
 use inputs::{check_inputs, same_inputs, Held};
@@ -88,7 +90,7 @@ use slots::Slots;
 /// a step); no indexing on the step path can panic, and a failed step returns an error
 /// and keeps the last good state.
 ///
-/// **Size.** `size_of::<Twin<f64>>()` is 63 552 B (62.1 KiB), `Twin<f32>` 32 752 B
+/// **Size.** `size_of::<Twin<f64>>()` is 63 576 B (62.1 KiB), `Twin<f32>` 32 760 B
 /// (32.0 KiB) on x86_64: three slots, each a model and a workspace sized for the
 /// converter; the mode choice builds its reference model in the one it leaves free
 /// (the core asserts the budgets at compile time: 64 KiB and 32 KiB). A step's
@@ -189,6 +191,9 @@ pub struct Twin<T: Real> {
     inputs: Held<T>,
     links: [LinkState<T>; 9],
     shaft_angle: T,
+    /// The shaft's motion while it coasts ([`Mode::Coast`]), taken from the step's
+    /// start (or the coasting's) on.
+    coast: Coast<T>,
     c: [T; 2],
     joints: [Vec2<T>; 11],
     guards: Guards<T>,
@@ -377,6 +382,8 @@ impl<T: Real> Twin<T> {
         if fresh {
             self.dp5.invalidate();
         }
+        let coast = self.coast;
+        self.coast_from_state(inputs.load);
         let mut w = self.work_from_state();
         // Every rung but the finest may stop at an event whose state already breaks the
         // energy balance: a finer one redoes the step, its event and mode choice anyway.
@@ -396,6 +403,7 @@ impl<T: Real> Twin<T> {
             }
             Err(e) => {
                 self.restore(w.switched, saved);
+                self.coast = coast;
                 Err(e)
             }
         }
@@ -500,6 +508,7 @@ impl<T: Real> Twin<T> {
             inputs,
             drive: self.drive,
             friction: self.lossy.then_some(&self.params.friction),
+            coast: self.coast,
         };
         let Err(e) = self.dp5.step(&mut sys, &mut w.t, &mut w.y, h) else {
             return Ok(true);
@@ -592,6 +601,7 @@ impl<T: Real> Twin<T> {
             w.t = t_end;
             self.dp5.invalidate();
         }
+        self.coast_to(w, t_end, self.coast.accel);
         self.settle_clutch_torques(w, inputs)
     }
 
@@ -652,10 +662,11 @@ fn load_state<T: Real>(slot: &Slot<T>, q: &[T; 2], omega: &[T; 9], y: &mut SVect
 }
 
 /// The shaft's rotation since a segment's start (levers 6 and 8 at `start`, rad) to
-/// the physical state `links`, in `mode`: the engaged lever's rotation if `mode` turns
-/// the shaft (the lever turns with it), else 0, rad.
+/// the physical state `links`, in `mode`: the engaged lever's rotation if a lever
+/// carries the shaft (it turns with it), else 0 (a coasting shaft's turn is booked by
+/// [`Twin::coast_to`]), rad.
 fn shaft_turn<T: Real>(mode: Mode, links: &[LinkState<T>; 9], start: &[T; 2]) -> T {
-    if !mode.shaft_turning() {
+    if !lever_driven(mode) {
         return T::zero();
     }
     let (k, lever) = if mode.clutches()[0] == Clutch::Engaged {
@@ -666,18 +677,20 @@ fn shaft_turn<T: Real>(mode: Mode, links: &[LinkState<T>; 9], start: &[T; 2]) ->
     unwrap_near(links[lever].theta, start[k]) - start[k]
 }
 
-/// Shaft speed, rad/s CCW: the engaged lever's in an A mode, 0 otherwise.
+/// Shaft speed, rad/s CCW: the engaged lever's in an A mode, 0 otherwise (the coasting
+/// shaft's is [`Twin::shaft_at`]).
 fn shaft_speed<T: Real>(mode: Mode, links: &[LinkState<T>; 9]) -> T {
     match mode.clutches() {
-        _ if !mode.shaft_turning() => T::zero(),
+        _ if !lever_driven(mode) => T::zero(),
         [Clutch::Engaged, _] => links[6].omega,
         _ => links[8].omega,
     }
 }
 
+/// Shaft acceleration, rad/s², as [`shaft_speed`].
 fn shaft_accel<T: Real>(mode: Mode, links: &[LinkState<T>; 9]) -> T {
     match mode.clutches() {
-        _ if !mode.shaft_turning() => T::zero(),
+        _ if !lever_driven(mode) => T::zero(),
         [Clutch::Engaged, _] => links[6].alpha,
         _ => links[8].alpha,
     }

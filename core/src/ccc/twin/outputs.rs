@@ -9,7 +9,7 @@ use super::audit::Audit;
 use super::coordinates::CoordinateSwitch;
 use super::guards::Event;
 use super::slot::{LinkState, QD};
-use super::{shaft_speed, Twin};
+use super::Twin;
 use crate::scalar::{Real, Vec2};
 
 /// The twin's angles less the measured ones, rad, of each encoder measured.
@@ -105,7 +105,13 @@ impl<T: Real> Twin<T> {
 
     /// Shaft speed, rad/s, CCW positive (0 while held).
     pub fn shaft_speed(&self) -> T {
-        shaft_speed(self.slots.cur().mode, &self.links)
+        self.shaft_at(self.slots.cur().mode, &self.links, self.t)
+    }
+
+    /// Shaft acceleration, rad/s², CCW positive (0 while held; the coasting shaft's
+    /// own under its brake and drag in [`Mode::Coast`]).
+    pub fn shaft_acceleration(&self) -> T {
+        self.shaft_alpha(self.slots.cur().mode, &self.links)
     }
 
     /// Shaft angle turned since the start, rad, CCW positive.

@@ -6,6 +6,7 @@ use super::super::build::{build_into, BodyMap, BRANCHES, CRANK};
 use super::super::mode::{Clutch, Coordinates, Mode};
 use super::super::params::{CccParams, Friction, FRICTION_JOINTS};
 use super::capacity::Converter;
+use super::coast::Coast;
 use super::error::TwinStepError;
 use super::inputs::Inputs;
 use crate::dynamics::solve_accelerations;
@@ -296,7 +297,8 @@ impl<T: Real> Slot<T> {
     /// Evaluates the equations of motion at `(t, y)` with the inputs: kinematics, then
     /// the motor torque on the crank (from its evaluated speed), the load on the
     /// engaged lever and, when any is on, the losses `friction` (joint friction, clutch
-    /// drag) as applied moments, then `q̈`.
+    /// drag; `shaft`: the coasting shaft's speed at `t` in [`Mode::Coast`], rad/s, which
+    /// the overrunning levers drag against) as applied moments, then `q̈`.
     pub fn eval(
         &mut self,
         t: T,
@@ -304,6 +306,7 @@ impl<T: Real> Slot<T> {
         inputs: &Inputs<T>,
         drive: T,
         friction: Option<&Friction<T>>,
+        shaft: T,
     ) -> Result<(), StepError> {
         let n = self.map.dof.min(2);
         let s = y.as_slice();
@@ -336,7 +339,7 @@ impl<T: Real> Slot<T> {
         }
         if let Some(friction) = friction {
             let mut moments = self.ws.applied_moment;
-            self.losses(friction, |body, tau, _| {
+            self.losses(friction, shaft, |body, tau, _| {
                 if body != 0 {
                     if let Some(m) = moments.get_mut(body as usize) {
                         *m += tau;
@@ -364,8 +367,9 @@ impl<T: Real> Slot<T> {
     /// so `-Σ torque·w / 2` over the visits is the power it dissipates. Joint friction
     /// at every joint of [`FRICTION_JOINTS`] with a coefficient; the drag of each
     /// overrunning clutch against the shaft (the engaged lever's body in an A mode, the
-    /// held shaft in an I mode; none in the free mode, which has no diode).
-    fn losses(&self, f: &Friction<T>, mut visit: impl FnMut(u8, T, T)) {
+    /// held shaft in an I mode, the coasting shaft [`COASTING_SHAFT`] at its speed
+    /// `shaft` in [`Mode::Coast`]; none in the free mode, which has no diode).
+    fn losses(&self, f: &Friction<T>, shaft_w: T, mut visit: impl FnMut(u8, T, T)) {
         for (k, (i, j)) in FRICTION_JOINTS.iter().enumerate() {
             let c = f.viscous.get(k).copied().unwrap_or(T::zero());
             let mu = f.coulomb.get(k).copied().unwrap_or(T::zero());
@@ -381,13 +385,22 @@ impl<T: Real> Slot<T> {
         if f.clutch_drag == T::zero() || self.mode == Mode::Free {
             return;
         }
-        let shaft = self.shaft_body().unwrap_or(0);
+        let coasting = self.mode == Mode::Coast;
+        let shaft = if coasting {
+            COASTING_SHAFT
+        } else {
+            self.shaft_body().unwrap_or(0)
+        };
         let ws = self
             .ws
             .body
             .get(shaft as usize)
             .map_or(T::zero(), |s| s.omega);
-        let ws = if shaft == 0 { T::zero() } else { ws };
+        let ws = match shaft {
+            COASTING_SHAFT => shaft_w,
+            0 => T::zero(),
+            _ => ws,
+        };
         for ((_, lever), clutch) in BRANCHES.iter().zip(self.mode.clutches()) {
             if clutch != Clutch::Free {
                 continue;
@@ -410,13 +423,14 @@ impl<T: Real> Slot<T> {
     }
 
     /// `dy` of the state after [`Slot::eval`]: `q̇`, `q̈`, motor power, load power (with
-    /// the power the losses `friction` dissipate, when any is on).
+    /// the power the losses `friction` dissipate, when any is on; `shaft` as there).
     pub fn rates(
         &self,
         y: &SVector<T, STATE>,
         inputs: &Inputs<T>,
         drive: T,
         friction: Option<&Friction<T>>,
+        shaft: T,
     ) -> SVector<T, STATE> {
         let mut dy = SVector::<T, STATE>::zeros();
         let n = self.map.dof.min(2);
@@ -436,11 +450,17 @@ impl<T: Real> Slot<T> {
         if let Some(friction) = friction {
             // The crank's applied moment holds its joints' friction as well: the
             // motor's alone is its power.
-            self.losses(friction, |body, tau, w| {
+            self.losses(friction, shaft, |body, tau, w| {
                 if body as usize == crank {
                     on_crank -= tau;
                 }
                 loss -= tau * w;
+                if body == COASTING_SHAFT {
+                    // The coasting shaft's share (the drag's work on it) is booked with
+                    // its own motion (`Twin::coast_to`): the two visits here count the
+                    // drag's work on the lever alone, `τ·ω_k` each (`w = ω_s − ω_k`).
+                    loss += T::c(2.0) * tau * shaft;
+                }
             });
         }
         dy[W_MOTOR] = on_crank * w1;
@@ -691,12 +711,18 @@ fn pin_friction<T: Real>(f: &Friction<T>, k: usize) -> Option<(T, T)> {
 /// Names of [`JOINTS`], for CSV headers.
 pub const JOINT_NAMES: [&str; 11] = ["A", "B", "C", "E", "F", "D5", "D7", "G", "I", "H6", "H8"];
 
+/// The model body [`Slot::losses`] names the coasting shaft by: none of the model's
+/// (it is no body of the linkage), so no moment is applied to it there.
+pub(crate) const COASTING_SHAFT: u8 = u8::MAX;
+
 /// The ODE of a slot with its inputs, for the integrator.
 pub(crate) struct Equations<'a, T: Real> {
     pub slot: &'a mut Slot<T>,
     pub inputs: &'a Inputs<T>,
     pub drive: T,
     pub friction: Option<&'a Friction<T>>,
+    /// The coasting shaft's motion ([`Mode::Coast`]).
+    pub coast: Coast<T>,
 }
 
 impl<T: Real> OdeSystem<T, STATE> for Equations<'_, T> {
@@ -707,9 +733,12 @@ impl<T: Real> OdeSystem<T, STATE> for Equations<'_, T> {
         y: &SVector<T, STATE>,
         dy: &mut SVector<T, STATE>,
     ) -> Result<(), StepError> {
+        let shaft = self.coast.omega_at(t);
         self.slot
-            .eval(t, y, self.inputs, self.drive, self.friction)?;
-        *dy = self.slot.rates(y, self.inputs, self.drive, self.friction);
+            .eval(t, y, self.inputs, self.drive, self.friction, shaft)?;
+        *dy = self
+            .slot
+            .rates(y, self.inputs, self.drive, self.friction, shaft);
         Ok(())
     }
 }

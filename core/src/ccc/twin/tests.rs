@@ -14,7 +14,7 @@ use std::string::String;
 /// form: two prints are equal only if the bits are, a -0 included).
 fn committed(t: &Twin<f64>) -> String {
     format!(
-        "{:?} {} {:?} {:?} {:?} {:?} {:?} {:?} {:?} {:?} {:?} {:?} {:?} {:?} {:?}",
+        "{:?} {} {:?} {:?} {:?} {:?} {:?} {:?} {:?} {:?} {:?} {:?} {:?} {:?} {:?} {:?}",
         t.t,
         t.steps,
         t.y,
@@ -26,6 +26,7 @@ fn committed(t: &Twin<f64>) -> String {
         t.last_guards,
         t.audit,
         t.shaft_angle,
+        t.coast,
         t.events,
         t.switches,
         t.candidates,
