@@ -314,3 +314,35 @@ fn the_torque_estimate_finds_a_known_extra_torque_on_the_crank() {
         assert!(near >= 0.6, "{name}: {near}");
     }
 }
+
+/// `Twin::crank_mobility` (`r M⁻¹ rᵀ`, the force observer's `b`) against the twin's
+/// own evaluation, an independent path: one N·m more of motor torque at the same state
+/// changes the crank's angular acceleration by `b` (to 1e-8), in each initial mode the
+/// crank angles give (I0 with its two coordinates, I8, A68 measured).
+#[test]
+fn the_crank_mobility_is_the_crank_s_acceleration_per_newton_metre() {
+    let mut modes = Vec::new();
+    for deg in [60.0, 105.0, 150.0, 200.0, 250.0, 300.0] {
+        let at = |torque: f64| {
+            let mut s = TwinSettings::reference(H);
+            s.crank = f64::to_radians(deg);
+            let inputs = Inputs {
+                motor: MotorInput::Law(Motor::Constant(torque)),
+                load: 800.0,
+                measured: None,
+            };
+            Twin::<f64>::new(CccParams::reference(), s, inputs).ok()
+        };
+        let (Some(a), Some(b)) = (at(12.0), at(13.0)) else {
+            continue;
+        };
+        if a.mode() != b.mode() || a.q().is_empty() {
+            continue;
+        }
+        let da = b.link(1).alpha - a.link(1).alpha;
+        let m = a.crank_mobility();
+        assert!((da - m).abs() <= 1e-8 * m.abs(), "{deg}°: {da} vs {m}");
+        modes.push((a.mode(), a.q().len()));
+    }
+    assert!(modes.len() >= 3, "{modes:?}");
+}

@@ -1,6 +1,7 @@
 //! The twin corrected by the bench's encoders every step: an error-state (indirect)
 //! Kalman filter after Sanjurjo et al. ("State and force observers based on multibody
-//! models and the indirect Kalman filter"), in crank terms.
+//! models and the indirect Kalman filter"), in crank terms, with their force
+//! estimation: an unknown torque on the crank.
 //!
 //! Why this design. The twin's step is already the best prediction there is (DP5 on the
 //! mode's exact equations, its events, impacts and coordinate switches): the indirect
@@ -18,6 +19,20 @@
 //! crank's encoder; the shaft's encoder is used for the clutch diagnostics, not as a
 //! correction (the shaft follows a lever only while engaged).
 //!
+//! The force observer. A correction of the state alone leaves the model's dynamics as
+//! they are, so the twin drifts again between updates and its clutch torques (which
+//! set the releases' and the jam's times) stay the nominal model's. The error state is
+//! augmented with `d`, a torque on the crank (N·m, CCW) that the machine has and the
+//! model lacks — its joints' friction and its masses' errors, seen at the crank — as a
+//! random walk; its estimate is added to the motor's torque in the prediction (the
+//! twin's own step), so the correction changes the dynamics in every mode, the 2-DOF
+//! ones included, where it is not updated. Its effect on the crank's acceleration is
+//! `d b`, `b = r M⁻¹ rᵀ` the present mode's crank mobility ([`Twin::crank_mobility`],
+//! the inverse of the crank-reduced inertia); it grows uncertain by
+//! [`ObserverSettings::event_torque_var`] at each mode change (another mode, another
+//! reduced inertia and so another error of it) and is held within
+//! [`ObserverSettings::torque_limit`].
+//!
 //! The innovations become named diagnostics ([`Diagnostic`]): a crank reading past the
 //! innovation gate is an encoder jump (not used; a few in a row are taken as real and
 //! the covariance reset); the shaft's motion measured since the last mode change,
@@ -25,8 +40,8 @@
 //! mean acceleration while the shaft turns against while it is held names a load off
 //! its set point.
 //!
-//! Bounded work, no allocation, no panic: a twin step, a few dozen scalar operations
-//! and at most one [`Twin::correct_crank`] (one evaluation of the mode, and a mode
+//! Bounded work, no allocation, no panic: a twin step, a few 3×3 products and at most
+//! one [`Twin::correct_crank`] (one evaluation of the mode, and a mode
 //! choice only when the correction fires an event function).
 
 mod diagnostics;
