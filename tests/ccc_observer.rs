@@ -197,9 +197,11 @@ fn a_correction_moves_the_crank_and_books_its_energy() {
 /// A twin with no model error (the machine's own twin and inputs), observed through
 /// its encoders in f64 and in f32: it makes the machine's 23 events of S2 in the
 /// machine's order (the same kinds and modes), each within 10 ms, raises no
-/// diagnostic, and stays within 16 counts of the machine's crank (a regression bound,
+/// diagnostic, and stays within 20 counts of the machine's crank (a regression bound,
 /// not the target of 0: the corrections carry the counts' quantization into the
-/// state; see the README's observer paragraph).
+/// state and the torque's estimate, which has no torque to find here, wanders by it;
+/// measured 18.5 counts in f64, 16 before the torque was estimated; see the README's
+/// observer paragraph).
 #[test]
 fn with_no_model_error_the_observer_keeps_the_machine_s_events() {
     fn run<T: Real>() {
@@ -217,7 +219,7 @@ fn with_no_model_error_the_observer_keeps_the_machine_s_events() {
             theirs.extend(machine.twin.events().iter().map(|e| (e.time, e.kind, e.to)));
             ours.extend(t.events().iter().map(|e| (e.time.to_f64(), e.kind, e.to)));
         }
-        assert!(worst <= 16.0, "{worst} counts off the machine");
+        assert!(worst <= 20.0, "{worst} counts off the machine");
         assert_eq!(theirs.len(), 23, "S2's events");
         assert_eq!(ours.len(), 23);
         for (a, b) in theirs.iter().zip(&ours) {
@@ -263,4 +265,84 @@ fn injected_faults_are_named_at_their_instants() {
     }
     let k = slip_seen.expect("the slip named");
     assert!((slip_at..slip_at + 10).contains(&k), "named at step {k}");
+}
+
+/// The force observer on a machine with a known torque the model lacks: S2's twin
+/// stepped open-loop with 0.5 N·m more on its crank than the observed twin is told
+/// (the motor's constant 12.5 N·m against 12), read through its encoders. The
+/// observer's torque estimate (the oracle: the torque put in) finds it: its mean from
+/// 0.1 s to the end within 0.2 N·m of 0.5 (measured 0.41 in f64 and f32), 60 % of the
+/// steps within 0.5 N·m of it (measured 64 %: the estimate moves with the counts'
+/// quantization and the crank's reversals), no diagnostic. (With 1.5 N·m the twin's
+/// mode sequence parts from the machine's at 0.22 s, in I0 where the filter does not
+/// update, and the observer loses the machine: README, "The observer".)
+#[test]
+fn the_torque_estimate_finds_a_known_extra_torque_on_the_crank() {
+    fn run<T: Real>() -> Vec<f64> {
+        let extra = 0.5;
+        let mut machine = Machine::new();
+        let law = |c: f64| MotorInput::Law(Motor::Constant(c));
+        let mut t = twin::<T>(105.0);
+        let mut obs = TwinObserver::new(ObserverSettings::reference());
+        let mut estimates = Vec::new();
+        for _ in 0..1000 {
+            machine
+                .twin
+                .step(&Inputs {
+                    motor: law(12.0 + extra),
+                    load: 800.0,
+                    measured: None,
+                })
+                .expect("the machine steps");
+            let c = (
+                counts(machine.twin.link(1).theta),
+                counts(machine.twin.shaft_drive_angle()),
+            );
+            let up = obs.step(&mut t, &s2_inputs(Some(reading(c)))).unwrap();
+            assert!(up.diagnostics.is_empty(), "{:?}", up.diagnostics);
+            estimates.push(obs.torque().to_f64());
+        }
+        estimates
+    }
+    for (name, e) in [("f64", run::<f64>()), ("f32", run::<f32>())] {
+        let late = &e[100..];
+        let mean = late.iter().sum::<f64>() / late.len() as f64;
+        let near = late.iter().filter(|x| (*x - 0.5).abs() <= 0.5).count();
+        let near = near as f64 / late.len() as f64;
+        eprintln!("{name}: mean {mean}, {near} of the steps within 0.5 N·m");
+        assert!((mean - 0.5).abs() <= 0.2, "{name}: mean {mean}");
+        assert!(near >= 0.6, "{name}: {near}");
+    }
+}
+
+/// `Twin::crank_mobility` (`r M⁻¹ rᵀ`, the force observer's `b`) against the twin's
+/// own evaluation, an independent path: one N·m more of motor torque at the same state
+/// changes the crank's angular acceleration by `b` (to 1e-8), in each initial mode the
+/// crank angles give (I0 with its two coordinates, I8, A68 measured).
+#[test]
+fn the_crank_mobility_is_the_crank_s_acceleration_per_newton_metre() {
+    let mut modes = Vec::new();
+    for deg in [60.0, 105.0, 150.0, 200.0, 250.0, 300.0] {
+        let at = |torque: f64| {
+            let mut s = TwinSettings::reference(H);
+            s.crank = f64::to_radians(deg);
+            let inputs = Inputs {
+                motor: MotorInput::Law(Motor::Constant(torque)),
+                load: 800.0,
+                measured: None,
+            };
+            Twin::<f64>::new(CccParams::reference(), s, inputs).ok()
+        };
+        let (Some(a), Some(b)) = (at(12.0), at(13.0)) else {
+            continue;
+        };
+        if a.mode() != b.mode() || a.q().is_empty() {
+            continue;
+        }
+        let da = b.link(1).alpha - a.link(1).alpha;
+        let m = a.crank_mobility();
+        assert!((da - m).abs() <= 1e-8 * m.abs(), "{deg}°: {da} vs {m}");
+        modes.push((a.mode(), a.q().len()));
+    }
+    assert!(modes.len() >= 3, "{modes:?}");
 }

@@ -60,14 +60,15 @@ fn edited(dir: &TempDir, name: &str, edit: impl Fn(f64, &mut Vec<String>)) -> St
 /// Issue 19: "the observer with SPEC's nominal parameters (not identified), from a
 /// crank angle 5° off: crank residual RMS ≤ 1 count after the first 20 ms, every
 /// clutch event within 1 ms". The filter starts from the first count (as a Kalman
-/// filter's state does from its first measurement). Measured, and NOT met in full (README, "The observer"):
-/// the machine's 21 events in the machine's sequence (open loop the sequences part at
-/// the 14th pair), 17 of them within 1 ms of the clutch log (the first release is
-/// 3.9 ms late, the jam 21.7 ms early: torques of the nominal parameters, which a state
-/// correction does not change), the crank's residual RMS 7.5 counts after 20 ms (82 at
-/// the crank's reversal at 0.49 s, where the crank's angle does not observe the state).
-/// The bounds below are those measurements' (regression values), the sequence the
-/// clutch log's; the columns in the CSV; the summary's lines.
+/// filter's state does from its first measurement). Measured, and NOT met in full
+/// (README, "The observer"): the machine's 21 events in the machine's sequence (open
+/// loop the sequences part at the 14th pair), 17 of them within 1 ms of the clutch log
+/// (the second release8 1.9 ms early, a shaft-stop 1.3 ms early, a catch6 1.2 ms early,
+/// the jam 21.7 ms early), the crank's residual RMS 2.76 counts after 20 ms (19 at
+/// 0.50 s, near the crank's reversal in I6, where its angle does not observe the state),
+/// with the force observer's torque estimate; 3.48 counts and 16 events before it. The
+/// bounds below are those measurements' (regression values), the sequence the clutch
+/// log's; the columns in the CSV; the summary's lines.
 #[test]
 fn bench1_observed_from_5_degrees_off_follows_the_machine_s_sequence() {
     let dir = TempDir::new("observe-bench1");
@@ -85,9 +86,10 @@ fn bench1_observed_from_5_degrees_off_follows_the_machine_s_sequence() {
         &out,
     ]);
     let o = s.observed.as_ref().expect("the observer's summary");
-    // Regression values (measured 3.48 and 3.78 counts): the issue's target is 1.
-    assert!(o.residual_settled.rms() <= 4.0, "{o}");
-    assert!(o.innovation_settled.rms() <= 4.0, "{o}");
+    // Regression values (measured 2.76 and 2.93 counts): the issue's target is 1.
+    assert!(o.residual_settled.rms() <= 2.9, "{o}");
+    assert!(o.innovation_settled.rms() <= 3.1, "{o}");
+    assert!(o.residual_settled.largest.0.abs() <= 19, "{o}");
     let m = s.matching.as_ref().expect("a clutch log");
     assert_eq!(m.counts(), (21, 21), "{m}");
     assert_eq!(m.first_mismatch(), None, "{m}");
@@ -96,8 +98,8 @@ fn bench1_observed_from_5_degrees_off_follows_the_machine_s_sequence() {
         .iter()
         .filter(|p| p.dt().unwrap().abs() <= 1e-3)
         .count();
-    // Regression value (measured 16): the issue's target is all 21.
-    assert!(within >= 16, "{within} of 21 within 1 ms: {m}");
+    // Regression value (measured 17): the issue's target is all 21.
+    assert!(within >= 17, "{within} of 21 within 1 ms: {m}");
     assert_eq!(o.first("clutch-slip"), None, "{o}");
     assert_eq!(o.first("failed-catch"), None, "{o}");
     // Open loop from the same start the sequences part (issue: at 0.33 s from 105°).
@@ -121,6 +123,7 @@ fn bench1_observed_from_5_degrees_off_follows_the_machine_s_sequence() {
     for c in [
         "crank_sigma",
         "shaft_innovation",
+        "crank_torque_estimate",
         "clutch_slip",
         "load_bias",
     ] {
@@ -182,8 +185,9 @@ fn a_slipping_clutch_injected_into_bench1_is_named_within_10_ms() {
 /// A log the twin wrote itself (S2 at the log's step, through the bench's encoder
 /// law): with no model error the observed twin makes the same events (kinds and modes,
 /// the log's oracle) and raises no diagnostic; its residual is not 0 (the issue's
-/// target): the corrections carry the counts' quantization into the state, and in I0
-/// the unobserved swing link drifts (measured bounds below).
+/// target): the corrections carry the counts' quantization into the state and the
+/// torque's estimate (which has no torque to find here), and in I0 the unobserved
+/// swing link drifts (measured bounds below).
 #[test]
 fn a_log_the_twin_wrote_observed_makes_the_same_events() {
     let dir = TempDir::new("observe-self");
@@ -226,19 +230,34 @@ fn a_log_the_twin_wrote_observed_makes_the_same_events() {
         &dir.join("o.csv"),
     ]);
     let o = s.observed.as_ref().unwrap();
-    // Regression values (measured: RMS 1.38 counts, largest 16 at 0.224 s, in I0 before
-    // a catch): the issue's target is 0, which the open loop meets (below).
-    assert!(s.crank.largest.0.abs() <= 16, "{}", s.crank);
-    assert!(s.crank.rms() <= 1.5, "{}", s.crank);
+    // Regression values (measured: RMS 1.88 counts, largest 19 at 0.224 s, in I0 before
+    // a catch; 1.38 and 16 before the torque was estimated): the issue's target is 0,
+    // which the open loop meets (below).
+    assert!(s.crank.largest.0.abs() <= 19, "{}", s.crank);
+    assert!(s.crank.rms() <= 1.95, "{}", s.crank);
     assert!(o.onsets.is_empty(), "{o}");
     let ev = |p: &str| std::fs::read_to_string(dir.join(p)).unwrap();
     let (a, b) = (ev("p.events.csv"), ev("o.events.csv"));
-    let kinds = |s: &str| -> Vec<String> {
+    let kinds = |s: &str| -> Vec<Vec<String>> {
         s.lines()
-            .map(|l| l.split(',').skip(1).take(3).collect::<Vec<_>>().join(","))
+            .map(|l| l.split(',').skip(1).take(3).map(String::from).collect())
             .collect()
     };
-    assert_eq!(kinds(&a), kinds(&b));
+    // The same modes in the same order, each by the same kind of event, but for the
+    // first release (measured): the torque estimate changes the motor's input at
+    // each step, and the twin takes a mode change that an input change starts at the
+    // step's start (kind `inputs`), here 0.76 ms before the plain replay's release8.
+    let (ka, kb) = (kinds(&a), kinds(&b));
+    assert_eq!(ka.len(), kb.len());
+    let mut by_inputs = 0;
+    for (x, y) in ka.iter().zip(&kb) {
+        assert_eq!(x[1..], y[1..], "{x:?} {y:?}");
+        if x[0] != y[0] {
+            assert_eq!(y[0], "inputs", "{x:?} {y:?}");
+            by_inputs += 1;
+        }
+    }
+    assert!(by_inputs <= 1, "{kb:?}");
     assert_eq!(plain.crank.largest.0, 0);
 }
 

@@ -12,12 +12,14 @@ use structomat::Real;
 
 /// The columns an observed replay appends after the residuals': the crank's innovation
 /// (measured - predicted, counts) and its standard deviation after the update (counts),
-/// the shaft's innovation since the last mode change (counts), and each diagnostic (1
-/// when raised at the step).
-pub const OBSERVER_COLUMNS: [&str; 8] = [
+/// the shaft's innovation since the last mode change (counts), the crank's unknown
+/// torque estimated (N·m, CCW, added to the motor's), and each diagnostic (1 when
+/// raised at the step).
+pub const OBSERVER_COLUMNS: [&str; 9] = [
     "crank_innovation",
     "crank_sigma",
     "shaft_innovation",
+    "crank_torque_estimate",
     "crank_jump",
     "shaft_jump",
     "clutch_slip",
@@ -140,6 +142,7 @@ impl ObservedSummary {
             num(nu),
             num(Some(sigma.to_f64().sqrt() / res)),
             num(up.shaft_innovation.map(|x| x.to_f64())),
+            num(Some(up.torque.to_f64())),
         ]);
         for (k, d) in Diagnostic::ALL.into_iter().enumerate() {
             let on = up.diagnostics.contains(d);

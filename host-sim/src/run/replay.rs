@@ -457,7 +457,7 @@ pub fn simulate_with<T: Real>(
         None => twin.step(now),
         Some(f) => {
             let up = f.step(twin, now)?;
-            update.set(Some((up, f.covariance().angle)));
+            update.set(Some((up, f.covariance().angle())));
             Ok(())
         }
     };

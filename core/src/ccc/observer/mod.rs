@@ -1,6 +1,7 @@
 //! The twin corrected by the bench's encoders every step: an error-state (indirect)
 //! Kalman filter after Sanjurjo et al. ("State and force observers based on multibody
-//! models and the indirect Kalman filter"), in crank terms.
+//! models and the indirect Kalman filter"), in crank terms, with their force
+//! estimation: an unknown torque on the crank.
 //!
 //! Why this design. The twin's step is already the best prediction there is (DP5 on the
 //! mode's exact equations, its events, impacts and coordinate switches): the indirect
@@ -18,6 +19,20 @@
 //! crank's encoder; the shaft's encoder is used for the clutch diagnostics, not as a
 //! correction (the shaft follows a lever only while engaged).
 //!
+//! The force observer. A correction of the state alone leaves the model's dynamics as
+//! they are, so the twin drifts again between updates and its clutch torques (which
+//! set the releases' and the jam's times) stay the nominal model's. The error state is
+//! augmented with `d`, a torque on the crank (N·m, CCW) that the machine has and the
+//! model lacks — its joints' friction and its masses' errors, seen at the crank — as a
+//! random walk; its estimate is added to the motor's torque in the prediction (the
+//! twin's own step), so the correction changes the dynamics in every mode, the 2-DOF
+//! ones included, where it is not updated. Its effect on the crank's acceleration is
+//! `d b`, `b = r M⁻¹ rᵀ` the present mode's crank mobility ([`Twin::crank_mobility`],
+//! the inverse of the crank-reduced inertia); it grows uncertain by
+//! [`ObserverSettings::event_torque_var`] at each mode change (another mode, another
+//! reduced inertia and so another error of it) and is held within
+//! [`ObserverSettings::torque_limit`].
+//!
 //! The innovations become named diagnostics ([`Diagnostic`]): a crank reading past the
 //! innovation gate is an encoder jump (not used; a few in a row are taken as real and
 //! the covariance reset); the shaft's motion measured since the last mode change,
@@ -25,8 +40,8 @@
 //! mean acceleration while the shaft turns against while it is held names a load off
 //! its set point.
 //!
-//! Bounded work, no allocation, no panic: a twin step, a few dozen scalar operations
-//! and at most one [`Twin::correct_crank`] (one evaluation of the mode, and a mode
+//! Bounded work, no allocation, no panic: a twin step, a few 3×3 products and at most
+//! one [`Twin::correct_crank`] (one evaluation of the mode, and a mode
 //! choice only when the correction fires an event function).
 
 mod diagnostics;
@@ -35,7 +50,8 @@ mod filter;
 pub use diagnostics::{BiasWatch, Diagnostic, Diagnostics};
 pub use filter::Covariance;
 
-use super::twin::{Correction, Inputs, Twin, TwinStepError};
+use super::twin::{Correction, Inputs, MotorInput, Twin, TwinStepError};
+use crate::motor::Motor;
 use crate::scalar::Real;
 
 /// The observer's tuning.
@@ -46,9 +62,19 @@ pub struct ObserverSettings<T> {
     pub accel_noise: T,
     /// Variance added to the speed error at each mode change, (rad/s)².
     pub event_speed_var: T,
-    /// Standard deviations of the initial crank angle's and speed's errors, rad and
-    /// rad/s.
-    pub initial_sigma: (T, T),
+    /// Spectral density of the random walk of the crank's unknown torque, N²·m²/s.
+    pub torque_noise: T,
+    /// Variance added to the unknown torque's error at each mode change, (N·m)²: the
+    /// new mode's inertia errors seen at the crank are not the old one's.
+    pub event_torque_var: T,
+    /// The largest unknown torque estimated, N·m (either sense): the estimate is held
+    /// within it. What the model lacks is a few N·m at the crank (joint friction, the
+    /// masses' ±10 %); an estimate past that is the filter's own divergence (a mode
+    /// sequence parted from the machine's), not a torque.
+    pub torque_limit: T,
+    /// Standard deviations of the initial crank angle's, speed's and unknown torque's
+    /// errors, rad, rad/s and N·m.
+    pub initial_sigma: (T, T, T),
     /// A crank innovation past `jump_gate` standard deviations of its variance (and
     /// `jump_counts` counts) is an encoder jump.
     pub jump_gate: T,
@@ -76,7 +102,10 @@ impl<T: Real> ObserverSettings<T> {
         ObserverSettings {
             accel_noise: T::c(100.0),
             event_speed_var: T::c(1.0),
-            initial_sigma: (T::c(0.2), T::c(2.0)),
+            torque_noise: T::c(150.0),
+            event_torque_var: T::c(5.0),
+            torque_limit: T::c(5.0),
+            initial_sigma: (T::c(0.2), T::c(2.0), T::c(2.0)),
             jump_gate: T::c(8.0),
             jump_counts: T::c(16.0),
             jump_run: 5,
@@ -99,15 +128,20 @@ pub struct Update<T> {
     pub shaft_innovation: Option<T>,
     /// The correction applied.
     pub correction: Option<Correction<T>>,
+    /// The crank's unknown torque estimated after the update, N·m (CCW; added to the
+    /// motor's in the next prediction).
+    pub torque: T,
     /// The diagnostics raised.
     pub diagnostics: Diagnostics,
 }
 
 /// The observer's state: the error's covariance and what the diagnostics watch.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct TwinObserver<T> {
+pub struct TwinObserver<T: Real> {
     settings: ObserverSettings<T>,
     p: Covariance<T>,
+    /// The crank's unknown torque estimated, N·m.
+    torque: T,
     jumps: u32,
     /// The shaft's count and the twin's shaft angle (drive direction, rad) at the last
     /// mode change.
@@ -118,13 +152,24 @@ pub struct TwinObserver<T> {
     counts: [Option<i64>; 2],
 }
 
+/// `inputs` with `torque` (N·m) added to the motor's on the crank, and whether it
+/// could be: a motor law other than a constant cannot take it.
+fn with_torque<T: Real>(inputs: &Inputs<T>, torque: T) -> (Inputs<T>, bool) {
+    let (motor, applied) = match inputs.motor {
+        MotorInput::Torque(v) => (MotorInput::Torque(v + torque), true),
+        MotorInput::Law(Motor::Constant(v)) => (MotorInput::Law(Motor::Constant(v + torque)), true),
+        law => (law, false),
+    };
+    (Inputs { motor, ..*inputs }, applied)
+}
+
 impl<T: Real> TwinObserver<T> {
     /// An observer with `settings`, its covariance the initial one.
     pub fn new(settings: ObserverSettings<T>) -> Self {
-        let (a, w) = settings.initial_sigma;
         TwinObserver {
             settings,
-            p: Covariance::diagonal(a, w),
+            p: Covariance::diagonal(settings.initial_sigma),
+            torque: T::zero(),
             jumps: 0,
             shaft_ref: None,
             bias: BiasWatch::new(),
@@ -133,9 +178,14 @@ impl<T: Real> TwinObserver<T> {
         }
     }
 
-    /// The error's covariance after the last update (crank angle and speed).
+    /// The error's covariance after the last update (crank angle, speed, torque).
     pub fn covariance(&self) -> Covariance<T> {
         self.p
+    }
+
+    /// The crank's unknown torque estimated, N·m (CCW).
+    pub fn torque(&self) -> T {
+        self.torque
     }
 
     /// The load-bias averages.
@@ -158,13 +208,22 @@ impl<T: Real> TwinObserver<T> {
         inputs: &Inputs<T>,
     ) -> Result<Update<T>, TwinStepError> {
         let counts = self.check_jumps(twin, inputs)?;
-        twin.step(inputs)?;
+        // The prediction: the twin's step with the estimated torque on the crank added
+        // to the motor's (a motor law that cannot take it: the estimate is held and
+        // only the state corrected).
+        let (biased, applied) = with_torque(inputs, self.torque);
+        twin.step(&biased)?;
         self.counts = counts;
         let s = self.settings;
         let h = twin.h();
-        let mut prior = self.p.predict(h, s.accel_noise);
+        let b = if applied {
+            twin.crank_mobility()
+        } else {
+            T::zero()
+        };
+        let mut prior = self.p.predict(h, b, s.accel_noise, s.torque_noise);
         if !twin.events().is_empty() {
-            prior.speed += s.event_speed_var;
+            prior.inflate(s.event_speed_var, s.event_torque_var);
             self.shaft_ref = None;
         }
         let mut up = Update {
@@ -172,6 +231,7 @@ impl<T: Real> TwinObserver<T> {
             innovation_var: None,
             shaft_innovation: None,
             correction: None,
+            torque: self.torque,
             diagnostics: Diagnostics::default(),
         };
         let measured = inputs.measured;
@@ -197,25 +257,32 @@ impl<T: Real> TwinObserver<T> {
                 up.diagnostics.insert(Diagnostic::EncoderJump("crank"));
             } else if observable {
                 if jump {
-                    let (a, w) = s.initial_sigma;
-                    prior = Covariance::diagonal(a, w);
+                    prior = Covariance::diagonal(s.initial_sigma);
                 }
                 self.jumps = 0;
-                let k = prior.gain(r);
+                let mut k = prior.gain(r);
+                if !applied {
+                    k[2] = T::zero();
+                }
                 // A correction that cannot be made (a group that does not assemble at the
                 // corrected state) leaves the twin at the step's state: the prediction
                 // stands, and so does its covariance.
                 let c = twin
-                    .correct_crank(k.0 * nu, k.1 * nu)
+                    .correct_crank(k[0] * nu, k[1] * nu)
                     .unwrap_or(Correction::none());
-                let posterior = prior.update(k, r);
+                let posterior = prior.update(&k, r);
                 // The update's covariance holds for the correction asked: one cut or
                 // scaled to under half of it (an event function's crossing, a dead
-                // point) keeps the prediction's.
-                let asked = (k.0 * nu).abs();
+                // point) keeps the prediction's, and the torque's estimate its own.
+                let asked = (k[0] * nu).abs();
                 let made = c.crank.0.abs();
-                if c.applied && posterior.finite() && made + made >= asked {
+                let torque = (self.torque + k[2] * nu)
+                    .max(-s.torque_limit)
+                    .min(s.torque_limit);
+                if c.applied && posterior.finite() && torque.finite() && made + made >= asked {
                     prior = posterior;
+                    self.torque = torque;
+                    up.torque = torque;
                 }
                 self.bias
                     .add(c.crank.1 / h, h, twin.mode().shaft_turning(), s.bias_time);

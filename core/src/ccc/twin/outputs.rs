@@ -76,6 +76,30 @@ impl<T: Real> Twin<T> {
         self.slots.cur().omega_row(CRANK)
     }
 
+    /// The crank's mobility `b = r M⁻¹ rᵀ`, 1/(kg·m²): the crank's angular acceleration
+    /// per N·m of torque on it in the present mode, at the last evaluation (`r` =
+    /// [`crank_transmission`](Self::crank_transmission), the generalized force of a
+    /// crank torque `τ` being `rᵀ τ`; `M` the mode's mass matrix in its coordinates;
+    /// `1/b` the crank-reduced inertia). 0 with no degree of freedom or a singular `M`.
+    pub fn crank_mobility(&self) -> T {
+        let slot = self.slots.cur();
+        let [r0, r1] = slot.omega_row(CRANK);
+        let m = |i: usize, j: usize| slot.ws.mass_q.get((i, j)).copied().unwrap_or(T::zero());
+        let (num, det) = match slot.map.dof {
+            1 => (r0 * r0, m(0, 0)),
+            2 => (
+                r0 * r0 * m(1, 1) - (m(0, 1) + m(1, 0)) * r0 * r1 + r1 * r1 * m(0, 0),
+                m(0, 0) * m(1, 1) - m(0, 1) * m(1, 0),
+            ),
+            _ => return T::zero(),
+        };
+        if det > T::zero() {
+            num / det
+        } else {
+            T::zero()
+        }
+    }
+
     /// Their accelerations, rad/s².
     pub fn qdd(&self) -> &[T] {
         self.slots
