@@ -15,6 +15,9 @@
 //! - [`Twin::new_in`] (and [`Twin::new`], feature `twin-by-value`) with arbitrary
 //!   parameters and settings, [`Twin::step`] with arbitrary inputs, and the twin's
 //!   output accessors;
+//! - the observed twin (features `observer-f64`, `observer-f32`): [`TwinObserver::step`]
+//!   with arbitrary encoder counts, resolutions and zeros (its update, the correction
+//!   [`Twin::correct_crank`] and the diagnostics), and what it reports;
 //! - the generic core: building the thesis's five-bar, [`Simulation::step`] (through
 //!   the dead-point switching's `Alternatives::step`), the kinetostatics, and the first
 //!   model's evaluation while an alternative drives (`Alternatives::first_evaluation`).
@@ -24,7 +27,10 @@
 use core::hint::black_box;
 use core::mem::MaybeUninit;
 use core::panic::PanicInfo;
-use structomat::ccc::{CccParams, Inputs, MotorInput, Twin, TwinSettings};
+use structomat::ccc::{
+    CccParams, Encoder, Inputs, Measurement, MotorInput, ObserverSettings, Twin, TwinObserver,
+    TwinSettings,
+};
 use structomat::motor::Motor;
 use structomat::simulation::switch::{Alternatives, SwitchSettings};
 use structomat::Real;
@@ -108,6 +114,55 @@ fn twin<T: Real>(steps: u32) -> T {
     sum
 }
 
+/// The observed twin: built in place, `steps` observer steps with opaque encoder
+/// readings (any counts, resolutions and zeros, NaN included); returns a checksum of
+/// what the observer reports.
+fn observed<T: Real>(steps: u32) -> T {
+    let params: CccParams<T> = black_box(CccParams::reference());
+    let settings: TwinSettings<T> = black_box(TwinSettings::reference(black_box(T::c(1e-3))));
+    let encoder = |counts: i64| Encoder {
+        counts: black_box(counts),
+        per_turn: black_box(4096),
+        zero: black_box(T::zero()),
+    };
+    let mut inputs = Inputs {
+        motor: MotorInput::Torque(black_box(T::c(12.0))),
+        load: T::c(800.0),
+        measured: None,
+    };
+    let mut place = MaybeUninit::uninit();
+    let Ok(twin) = Twin::new_in(&mut place, params, settings, black_box(inputs)) else {
+        return T::zero();
+    };
+    let mut observer = TwinObserver::new(black_box(ObserverSettings::reference()));
+    let mut sum = T::zero();
+    for k in 0..black_box(steps) {
+        inputs.measured = black_box(Some(Measurement {
+            crank: Some(encoder(i64::from(k))),
+            shaft: Some(encoder(-i64::from(k))),
+            rocker: Some(encoder(i64::from(k) / 2)),
+        }));
+        match observer.step(twin, &black_box(inputs)) {
+            Ok(up) => {
+                for v in [up.innovation, up.innovation_var, up.shaft_innovation]
+                    .into_iter()
+                    .flatten()
+                {
+                    sum += v;
+                }
+                sum += up.torque + T::c(up.diagnostics.iter().count() as f64);
+                if let Some(c) = up.correction {
+                    sum += c.crank.0 + c.crank.1;
+                }
+            }
+            Err(_) => sum += T::one(),
+        }
+        let p = observer.covariance();
+        sum += p.angle() + p.speed() + p.torque() + observer.torque() + twin.shaft_drive_angle();
+    }
+    sum
+}
+
 /// The generic core: the five-bar, `steps` fixed DP5 steps and the kinetostatics.
 fn five_bar<T: Real>(steps: u32) -> T {
     let Ok(scenario) = structomat::mechanisms::five_bar::<T>() else {
@@ -159,6 +214,12 @@ extern "C" fn main(argc: i32, _argv: *const *const u8) -> i32 {
     }
     if cfg!(feature = "twin-f32") {
         bad += i32::from(!twin::<f32>(steps).finite());
+    }
+    if cfg!(feature = "observer-f64") {
+        bad += i32::from(!observed::<f64>(steps).finite());
+    }
+    if cfg!(feature = "observer-f32") {
+        bad += i32::from(!observed::<f32>(steps).finite());
     }
     if cfg!(feature = "core-f64") {
         bad += i32::from(!five_bar::<f64>(steps).finite());
