@@ -2,7 +2,7 @@
 //! Exchange's), exported under its own name as the FMI 2.0 standard's C API. Each one
 //! checks its pointers, runs its body inside `catch_unwind` (no panic crosses into the
 //! importer: a caught one is `fmi2Fatal`, logged) and hands over to
-//! [`Instance`](crate::instance::Instance). The FMU state is saved and restored
+//! [`Instance`]. The FMU state is saved and restored
 //! (`fmi2GetFMUstate`, a copy of the twin); Model Exchange's functions, the state's
 //! serialization and directional derivatives are not offered by this Co-Simulation FMU
 //! (modelDescription.xml says so): they return `fmi2Error` with a message.

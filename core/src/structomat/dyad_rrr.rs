@@ -259,7 +259,7 @@ fn solve_2<T: Real>(gd: &GroupData<T>, r: Vec2<T>) -> [T; 2] {
     [m(0, 0) * r.x + m(0, 1) * r.y, m(1, 0) * r.x + m(1, 1) * r.y]
 }
 
-/// Velocity pass of the dyad (the linear pass of [`chain`](super::chain) written out
+/// Velocity pass of the dyad (the linear pass of [`chain`](mod@super::chain) written out
 /// for its two arms): `W ẋ = v_B - v_A` (the arms turn only with the unknowns), then
 /// link a turns about A at `θ̇a` and link b about C, whose velocity is
 /// `v_A + θ̇a J w_a`.

@@ -56,7 +56,7 @@ fn mass_properties<T: Real>(params: &CccParams<T>, p: usize) -> (T, T, Vec2<T>) 
 
 /// Kinetic and potential energy of the physical links (and of the shaft turning at
 /// `shaft_speed`), J: computed from the physical state (the links and their frame
-/// directions, [`Slot::frames`]), independently of the mode's model.
+/// directions, [`Slot::frames`](super::slot::Slot::frames)), independently of the mode's model.
 fn physical_energy<T: Real>(
     params: &CccParams<T>,
     links: &[LinkState<T>; 9],

@@ -253,7 +253,7 @@ impl<T: Real> Twin<T> {
 
     /// Builds mode `m` driven by `coords` at `load`'s pose with its physical speeds
     /// into the scratch slot ([`Twin::scratch`]), moving the model it holds if it is that one (see
-    /// [`Slot::reposition`]), and evaluates its equations of motion (not the
+    /// [`Slot::reposition`](super::slot::Slot::reposition)), and evaluates its equations of motion (not the
     /// kinetostatics); returns its speed gap (rad/s: the largest difference between a
     /// link's speed in the built model and the one it was given), `None` if it does
     /// not assemble, fails, or cannot carry the speeds.

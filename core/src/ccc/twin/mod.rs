@@ -198,11 +198,11 @@ pub struct Twin<T: Real> {
     joints: [Vec2<T>; 11],
     guards: Guards<T>,
     /// Time derivatives of the speed event functions at the last full evaluation
-    /// (rad/s²; `None` for the others): the slopes of [`hermite_root`]'s interpolant.
+    /// (rad/s²; `None` for the others): the slopes of [`hermite_root`](locate::hermite_root)'s interpolant.
     guard_rates: Guards<T>,
     /// The event functions at the start of the last DP5 step, if it had no event, and
-    /// its length (s): a third sample of a torque function for [`quadratic_root`], a
-    /// fifth of a speed function for [`hermite_root`].
+    /// its length (s): a third sample of a torque function for [`quadratic_root`](locate::quadratic_root), a
+    /// fifth of a speed function for [`hermite_root`](locate::hermite_root).
     last_guards: Option<(Guards<T>, T)>,
     audit: Audit<T>,
     events: heapless::Vec<Event<T>, MAX_EVENTS_PER_STEP>,
@@ -238,7 +238,7 @@ struct Work<T: Real> {
     segment_levers: [T; 2],
     /// Check the energy balance at each event, before its mode choice
     /// ([`Twin::balance_within`]), and fail the attempt there if it already breaks by
-    /// [`EVENT_AUDIT_MARGIN`] times the tolerance.
+    /// [`EVENT_AUDIT_MARGIN`](settings::EVENT_AUDIT_MARGIN) times the tolerance.
     audit_at_events: bool,
     /// The step ended in the rest branch of [`Twin::advance`] (its last evaluation the
     /// full one of the state at rest, at the step's end).

@@ -125,7 +125,7 @@ pub(super) fn speed_scale<T: Real>(links: &[LinkState<T>; 9]) -> T {
     links.iter().fold(T::one(), |m, s| m.max(s.omega.abs()))
 }
 
-/// A candidate mode whose violation from the reference model ([`Twin::screen`]) is over
+/// A candidate mode whose violation from the reference model ([`Twin::screen`](super::Twin::screen)) is over
 /// this is not built: its own model would find it violating too (the two differ by
 /// rounding, ~1e-12 of the scales in f64). Near 0 the built model decides.
 pub(super) fn screen_margin<T: Real>() -> T {

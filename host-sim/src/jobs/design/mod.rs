@@ -1,8 +1,8 @@
 //! `host-sim design FILE --out-dir DIR`: a sweep whose variants an optimizer chooses.
-//! A design file ([`file`]) names a base converter, free parameters with bounds (any
+//! A design file ([`file`](mod@file)) names a base converter, free parameters with bounds (any
 //! numeric dotted run-file key), operating points, an objective and constraints; a
 //! seeded differential evolution ([`evolution`]) asks for a generation of designs, the
-//! worker pool evaluates each at every point ([`evaluate`]: the twin stepped to the
+//! worker pool evaluates each at every point ([`evaluate`](mod@evaluate): the twin stepped to the
 //! horizon with the diode's margin, the jam and the assembly checked at every step),
 //! the scores go back in job order ([`search`]), and the files are written from them
 //! ([`outputs`]).

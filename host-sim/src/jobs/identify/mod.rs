@@ -1,6 +1,6 @@
 //! `host-sim identify LOG.csv [--clutch-log CLUTCH.csv] [--params BASE.toml] [--fit
 //! KEYS] [--max-iters N] --out PARAMS.toml`: the converter's unknown parameters fitted
-//! to a bench log ([`fit`]), written as a converter run file: the base file (ccc-s2's
+//! to a bench log ([`fit`](mod@fit)), written as a converter run file: the base file (ccc-s2's
 //! without `--params`) with the identified values set at their keys, and in comments
 //! each value's uncertainty and bounds and the replay's numbers at the optimum. The
 //! file is what `replay --params` and `run` take; the same inputs write the same bytes.
