@@ -21,9 +21,9 @@ use nalgebra::{SMatrix, SVector};
 mod matrix;
 mod passes;
 
+use matrix::factor_w;
 pub(crate) use matrix::{factor, jacobian, Arms};
 pub(crate) use passes::{acceleration_pass, velocity_pass};
-use matrix::factor_w;
 
 /// The group's stacked loop-closure residuals (2 rows per closing chain).
 pub type GroupVector<T> = SVector<T, MAX_GROUP_VARS>;
@@ -556,7 +556,6 @@ pub(crate) fn position_from_jacobian<T: Real, const N: usize, C: Capacity<T>>(
     place(g, gd, model, bodies, q);
     Ok(det)
 }
-
 
 /// The closing chain of a dyad and its end pole (the closed forms' common start).
 pub(crate) fn closing_chain<T: Real>(g: &Group<T>) -> Result<(&Chain<T>, PointRef), GroupFault> {
