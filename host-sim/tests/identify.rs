@@ -15,23 +15,9 @@ use host_sim::cli::{parse_args, Command};
 use host_sim::jobs::identify;
 use host_sim::plot::Table;
 use host_sim::run::replay;
-use std::f64::consts::TAU;
-use std::path::PathBuf;
 
 mod common;
-use common::{run, TempDir};
-
-fn data(name: &str) -> String {
-    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/data")
-        .join(name);
-    p.to_str().expect("utf-8 path").to_string()
-}
-
-/// The bench's encoder law (its README): `floor(theta / (2π/4096))`.
-fn counts(theta: f64) -> i64 {
-    (theta / (TAU / 4096.0)).floor() as i64
-}
+use common::{counts, data, run, TempDir};
 
 /// The options of `host-sim identify ARGS`, as the command line parses them.
 fn identify_options(args: &[&str]) -> host_sim::options::IdentifyOptions {

@@ -6,36 +6,10 @@
 //! prototype's log `tests/data/bench1.csv` (a copy of `../shared/bench/`) gives the
 //! numbers that issue 19's text states; bad logs are refused by line and column.
 
-use host_sim::cli::{parse_args, Command};
 use host_sim::plot::Table;
-use host_sim::run::replay::{self, ReplaySummary};
-use std::f64::consts::TAU;
-use std::path::PathBuf;
 
 mod common;
-use common::{run, TempDir};
-
-/// The bench's encoder law (its README): `floor(theta / (2π/4096))`.
-fn counts(theta: f64) -> i64 {
-    (theta / (TAU / 4096.0)).floor() as i64
-}
-
-fn data(name: &str) -> String {
-    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/data")
-        .join(name);
-    p.to_str().expect("utf-8 path").to_string()
-}
-
-/// The summary of `host-sim replay ARGS` (run through the library, as the command
-/// line parses it).
-fn replay_of(args: &[&str]) -> ReplaySummary {
-    let cmd = parse_args([&["replay"][..], args].concat()).unwrap_or_else(|e| panic!("{e:?}"));
-    let Command::Replay(opts) = cmd else {
-        panic!("not a replay: {cmd:?}")
-    };
-    replay::run(&opts).unwrap_or_else(|e| panic!("replay: {e}"))
-}
+use common::{counts, data, replay_of, run, TempDir};
 
 /// The event log's `(time text, event, from, to)` rows, the start's left out.
 fn events(path: &str) -> Vec<[String; 4]> {

@@ -6,29 +6,11 @@
 //! is the issue's, not computed here), a fault injected into the log at a known
 //! instant, and a log the twin wrote itself (no model error).
 
-use host_sim::cli::{parse_args, Command};
 use host_sim::plot::Table;
-use host_sim::run::replay::{self, ReplaySummary};
 use std::f64::consts::TAU;
-use std::path::PathBuf;
 
 mod common;
-use common::{run, TempDir};
-
-fn data(name: &str) -> String {
-    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/data")
-        .join(name);
-    p.to_str().expect("utf-8 path").to_string()
-}
-
-fn replay_of(args: &[&str]) -> ReplaySummary {
-    let cmd = parse_args([&["replay"][..], args].concat()).unwrap_or_else(|e| panic!("{e:?}"));
-    let Command::Replay(opts) = cmd else {
-        panic!("not a replay: {cmd:?}")
-    };
-    replay::run(&opts).unwrap_or_else(|e| panic!("replay: {e}"))
-}
+use common::{data, replay_of, run, TempDir};
 
 /// ccc-s2's run file (SPEC's nominal machine) with the initial crank angle `deg`.
 fn spec_from(dir: &TempDir, deg: f64) -> String {

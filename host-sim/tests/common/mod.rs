@@ -1,5 +1,6 @@
-//! Helpers shared by the test files `golden.rs`, `batch.rs`, `sweep.rs` and `ccc_cli.rs` (each uses
-//! a part, hence the `dead_code` allowance).
+//! Helpers shared by the test files (`golden.rs`, `batch.rs`, `sweep.rs`, `ccc_cli.rs`,
+//! the bench logs' `replay.rs`, `replay_observer.rs` and `identify.rs`, ...: each uses a
+//! part, hence the `dead_code` allowance).
 
 #![allow(dead_code)]
 
@@ -118,4 +119,28 @@ pub fn number_after(text: &str, key: &str) -> f64 {
     rest[..end]
         .parse()
         .unwrap_or_else(|_| panic!("'{}' after '{key}' is not a number", &rest[..end]))
+}
+
+/// The path of `host-sim/tests/data/NAME` (the bench logs and their clutch logs).
+pub fn data(name: &str) -> String {
+    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data")
+        .join(name);
+    p.to_str().expect("utf-8 path").to_string()
+}
+
+/// The bench's encoder law (its README): `floor(theta / (2π/4096))`.
+pub fn counts(theta: f64) -> i64 {
+    (theta / (std::f64::consts::TAU / 4096.0)).floor() as i64
+}
+
+/// The summary of `host-sim replay ARGS` (run through the library, as the command
+/// line parses it).
+pub fn replay_of(args: &[&str]) -> host_sim::run::replay::ReplaySummary {
+    let cmd = host_sim::cli::parse_args([&["replay"][..], args].concat())
+        .unwrap_or_else(|e| panic!("{e:?}"));
+    let host_sim::cli::Command::Replay(opts) = cmd else {
+        panic!("not a replay: {cmd:?}")
+    };
+    host_sim::run::replay::run(&opts).unwrap_or_else(|e| panic!("replay: {e}"))
 }
