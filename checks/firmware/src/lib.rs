@@ -12,12 +12,25 @@
 //!   counts (the target); the host prints none.
 //!
 //! The first two kinds must be identical on the target and on the host; `run` compares
-//! them.
+//! them. After S2, the bench log observed ([`bench`]: the twin following the machine).
 #![no_std]
+
+/// Writes a record; a failed write (an output too long for its line) fails the run.
+macro_rules! record {
+    ($out:expr, $($arg:tt)*) => {
+        if writeln!($out, $($arg)*).is_err() {
+            return Err(Failed);
+        }
+    };
+}
+
+mod bench;
 
 use core::fmt::{self, Write};
 use core::mem::MaybeUninit;
-use structomat::ccc::{CccParams, Inputs, MotorInput, Twin, TwinSettings, TwinStepError};
+use structomat::ccc::{
+    CccParams, Inputs, MotorInput, Twin, TwinSettings, TwinSetupError, TwinStepError,
+};
 use structomat::motor::Motor;
 use structomat::{Real, Simulation};
 
@@ -273,9 +286,21 @@ pub fn event_line<T: Real, W: Write>(
 #[derive(Debug)]
 pub struct Failed;
 
-/// Runs everything for scalar `T`: each of `runs` (S2 from a twin built into
-/// `twin_slot`), then the five-bar for [`FIVE_BAR_STEPS`] from a simulation built into
-/// `sim_slot`, printing the records to `out`. `counts` holds at least [`MAX_STEPS`].
+/// Where the runs live: the firmware's statics (the host's boxes).
+pub struct Places<'a, T: Real> {
+    /// The twin of each run.
+    pub twin: &'a mut MaybeUninit<Twin<T>>,
+    /// bench1's plain copy of the observed twin, stepped beside it.
+    pub plain: &'a mut MaybeUninit<Twin<T>>,
+    /// The five-bar's simulation.
+    pub sim: &'a mut MaybeUninit<Simulation<T>>,
+    /// The instructions of each step, at least [`MAX_STEPS`].
+    pub counts: &'a mut [u32],
+}
+
+/// Runs everything for scalar `T` in `places`: each of `runs` (S2), bench1 observed
+/// (unless `perturbed`), then the five-bar for [`FIVE_BAR_STEPS`], printing the records
+/// to `out`.
 ///
 /// `perturbed` raises S2's load by its last bits (a factor 1 + ε, 2 ulps of 800 N·m):
 /// the check that a digest sees the least change of an input.
@@ -284,35 +309,31 @@ pub struct Failed;
 /// model or workspace on the stack; the `stack new` record is what that construction
 /// needs.
 pub fn run_all<T: Real, C: Counter, W: Write>(
-    twin_slot: &mut MaybeUninit<Twin<T>>,
-    sim_slot: &mut MaybeUninit<Simulation<T>>,
-    counts: &mut [u32],
+    places: Places<'_, T>,
     counter: &mut C,
     out: &mut W,
     runs: &[S2Run],
     perturbed: bool,
 ) -> Result<(), Failed> {
-    // Painted here, the stack of construction counts the frame of the run too.
+    let Places {
+        twin: twin_slot,
+        plain: plain_slot,
+        sim: sim_slot,
+        counts,
+    } = places;
     for run in runs {
-        counter.paint();
         run_s2(twin_slot, counts, counter, out, run, perturbed)?;
+    }
+    if !perturbed {
+        bench::run_bench1(twin_slot, plain_slot, counts, counter, out)?;
     }
     counter.paint();
     run_five_bar(sim_slot, counter, out)
 }
 
-/// Writes a record; a failed write (an output too long for its line) fails the run.
-macro_rules! record {
-    ($out:expr, $($arg:tt)*) => {
-        if writeln!($out, $($arg)*).is_err() {
-            return Err(Failed);
-        }
-    };
-}
-
 /// S2 for `run.steps` steps at `run.h` (its load raised by 2 ulps if `perturbed`): the
-/// records of `run`. (Not inlined, so that
-/// its frame is below the caller's stack paint.)
+/// records of `run`. Its stack records are what construction and the steps use below
+/// this function's frame (painted here before each).
 #[inline(never)]
 pub fn run_s2<T: Real, C: Counter, W: Write>(
     twin_slot: &mut MaybeUninit<Twin<T>>,
@@ -327,13 +348,9 @@ pub fn run_s2<T: Real, C: Counter, W: Write>(
     if perturbed {
         inputs.load *= T::one() + T::EPS;
     }
+    counter.paint();
     counter.start();
-    let built = Twin::new_in(
-        twin_slot,
-        CccParams::reference(),
-        TwinSettings::reference(T::c(run.h)),
-        inputs,
-    );
+    let built = new_twin(twin_slot, TwinSettings::reference(T::c(run.h)), inputs);
     let twin = match built {
         Ok(t) => t,
         Err(e) => {
@@ -408,6 +425,18 @@ pub fn run_s2<T: Real, C: Counter, W: Write>(
         );
     }
     Ok(())
+}
+
+/// The one call site of `Twin::new_in` (SPEC's converter with `settings`, started
+/// under `inputs`): S2's runs and bench1's build their twins through the same code, so
+/// the construction [`run_s2`] measures is the one every run makes.
+#[inline(never)]
+pub fn new_twin<T: Real>(
+    slot: &mut MaybeUninit<Twin<T>>,
+    settings: TwinSettings<T>,
+    inputs: Inputs<T>,
+) -> Result<&mut Twin<T>, TwinSetupError> {
+    Twin::new_in(slot, CccParams::reference(), settings, inputs)
 }
 
 /// The one call site of `Twin::step`, so that how the optimiser treats the step (what

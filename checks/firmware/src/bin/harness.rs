@@ -22,7 +22,7 @@ use core::mem::MaybeUninit;
 use cortex_m_rt::entry;
 use structomat::ccc::Twin;
 use structomat::Simulation;
-use structomat_firmware::{run_all, Counter, MAX_STEPS};
+use structomat_firmware::{run_all, Counter, Places, MAX_STEPS};
 
 #[path = "../target.rs"]
 mod target;
@@ -35,6 +35,7 @@ fn main() -> ! {
     // cortex-m-rt turns these into `&'static mut` owned by `main`: the firmware's
     // statics, in .bss, never on the stack.
     static mut TWIN: MaybeUninit<Twin<R>> = MaybeUninit::uninit();
+    static mut PLAIN: MaybeUninit<Twin<R>> = MaybeUninit::uninit();
     static mut SIM: MaybeUninit<Simulation<R>> = MaybeUninit::uninit();
     static mut COUNTS: [u32; MAX_STEPS] = [0; MAX_STEPS];
 
@@ -60,7 +61,13 @@ fn main() -> ! {
         _ => false,
     };
     let runs = if perturbed { &RUNS[..1] } else { &RUNS[..] };
-    let result = run_all(TWIN, SIM, COUNTS, &mut systick, &mut out, runs, perturbed);
+    let places = Places {
+        twin: TWIN,
+        plain: PLAIN,
+        sim: SIM,
+        counts: COUNTS,
+    };
+    let result = run_all(places, &mut systick, &mut out, runs, perturbed);
     match result {
         Ok(()) => {
             out.line(format_args!("done"));

@@ -10,7 +10,7 @@ use std::mem::MaybeUninit;
 use std::process::ExitCode;
 use structomat::ccc::Twin;
 use structomat::{Real, Simulation};
-use structomat_firmware::{run_all, NoCounter, S2Run, MAX_STEPS, RUNS_F32, RUNS_F64};
+use structomat_firmware::{run_all, NoCounter, Places, S2Run, MAX_STEPS, RUNS_F32, RUNS_F64};
 
 /// Standard output as a `fmt::Write`.
 struct Stdout;
@@ -27,17 +27,16 @@ impl fmt::Write for Stdout {
 fn run<T: Real>(runs: &[S2Run]) -> ExitCode {
     // On the heap: the twin is 63 KiB (f32) or 123 KiB (f64).
     let mut twin: Box<MaybeUninit<Twin<T>>> = Box::new_uninit();
+    let mut plain: Box<MaybeUninit<Twin<T>>> = Box::new_uninit();
     let mut sim: Box<MaybeUninit<Simulation<T>>> = Box::new_uninit();
     let mut counts = vec![0u32; MAX_STEPS];
-    match run_all(
-        &mut twin,
-        &mut sim,
-        &mut counts,
-        &mut NoCounter,
-        &mut Stdout,
-        runs,
-        false,
-    ) {
+    let places = Places {
+        twin: &mut twin,
+        plain: &mut plain,
+        sim: &mut sim,
+        counts: &mut counts,
+    };
+    match run_all(places, &mut NoCounter, &mut Stdout, runs, false) {
         Ok(()) => ExitCode::SUCCESS,
         Err(_) => ExitCode::FAILURE,
     }

@@ -81,8 +81,8 @@ impl<T: Real> Twin<T> {
 
     /// [`Twin::new`]'s twin built where it lives, in `place` (a `static`'s
     /// `MaybeUninit`, a `Box::new_uninit`): bit for bit the same twin, but nothing
-    /// larger than a group's data (1.2 KB) is built on the stack: construction needs 7.3
-    /// KiB of stack on a Cortex-M4F in f32 and 10.8 KiB on a Cortex-M7 in f64 (the first
+    /// larger than a group's data (1.2 KB) is built on the stack: construction needs 7.2
+    /// KiB of stack on a Cortex-M4F in f32 and 11.0 KiB on a Cortex-M7 in f64 (the first
     /// mode choice's frames, a step's), where `new` needs 219 and 445 KiB. On an error
     /// `place` holds a twin that must not be stepped (build it again).
     ///

@@ -103,7 +103,7 @@ use slots::Slots;
 ///
 /// **In firmware** the twin is far too large for a stack: it lives in a `static` and is
 /// built there by [`Twin::new_in`], which initialises it in place (construction needs
-/// 7.3 KiB of stack on a Cortex-M4F in f32 and 10.8 KiB on a Cortex-M7 in f64, painted
+/// 7.2 KiB of stack on a Cortex-M4F in f32 and 11.0 KiB on a Cortex-M7 in f64, painted
 /// under QEMU, where [`Twin::new`], which returns it by value, needs 219 and 445 KiB).
 /// Only [`Twin::step`] and the outputs are called after that.
 ///
