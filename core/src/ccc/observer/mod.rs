@@ -33,6 +33,14 @@
 //! reduced inertia and so another error of it) and is held within
 //! [`ObserverSettings::torque_limit`].
 //!
+//! The count's cell. An encoder count places the crank's angle in a cell one count
+//! wide; its quantization error is not white noise but follows the state (a slow crank
+//! keeps one side of a cell for many steps). The state and the torque are corrected by
+//! the innovation's part outside a band around the count's middle
+//! ([`ObserverSettings::state_band`], [`ObserverSettings::torque_band`]), so that a
+//! twin the count does not contradict is left as it is rather than made to chatter
+//! with the counts.
+//!
 //! The innovations become named diagnostics ([`Diagnostic`]): a crank reading past the
 //! innovation gate is an encoder jump (not used; a few in a row are taken as real and
 //! the covariance reset); the shaft's motion measured since the last mode change,
@@ -299,9 +307,17 @@ impl<T: Real> TwinObserver<T> {
                 // A correction that cannot be made (a group that does not assemble at the
                 // corrected state) leaves the twin at the step's state: the prediction
                 // stands, and so does its covariance.
-                let c = twin
-                    .correct_crank(k[0] * nu, k[1] * nu)
-                    .unwrap_or(Correction::none());
+                // Inside the band the twin is not touched: no re-evaluation, and its
+                // next step keeps DP5's first-same-as-last stage.
+                let c = if nu == T::zero() {
+                    Correction {
+                        applied: true,
+                        ..Correction::none()
+                    }
+                } else {
+                    twin.correct_crank(k[0] * nu, k[1] * nu)
+                        .unwrap_or(Correction::none())
+                };
                 let posterior = prior.update(&k, r);
                 // The update's covariance holds for the correction asked: one cut or
                 // scaled to under half of it (an event function's crossing, a dead
