@@ -275,9 +275,9 @@ fn injected_faults_are_named_at_their_instants() {
 /// 0.1 s to the end within 0.1 N·m of 0.5 (measured 0.484 in f64, 0.488 in f32; 0.41
 /// before the band of half a count), 85 % of the steps within 0.5 N·m of it
 /// (measured 90 %, 64 % before: the estimate moves with the crank's reversals), no
-/// diagnostic. (With 1.5 N·m the twin's
-/// mode sequence parts from the machine's at 0.22 s, in I0 where the filter does not
-/// update, and the observer loses the machine: README, "The observer".)
+/// diagnostic. (With 1.5 N·m the twin's mode sequence parts from the machine's at
+/// 0.50 s, near the crank's reversal in I6 where the filter does not update, and the
+/// observer loses the machine: README, "The observer".)
 #[test]
 fn the_torque_estimate_finds_a_known_extra_torque_on_the_crank() {
     fn run<T: Real>() -> Vec<f64> {
