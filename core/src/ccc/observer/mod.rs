@@ -33,6 +33,14 @@
 //! reduced inertia and so another error of it) and is held within
 //! [`ObserverSettings::torque_limit`].
 //!
+//! The count's cell. An encoder count places the crank's angle in a cell one count
+//! wide; its quantization error is not white noise but follows the state (a slow crank
+//! keeps one side of a cell for many steps). The state and the torque are corrected by
+//! the innovation's part outside a band around the count's middle
+//! ([`ObserverSettings::state_band`], [`ObserverSettings::torque_band`]), so that a
+//! twin the count does not contradict is left as it is rather than made to chatter
+//! with the counts.
+//!
 //! The innovations become named diagnostics ([`Diagnostic`]): a crank reading past the
 //! innovation gate is an encoder jump (not used; a few in a row are taken as real and
 //! the covariance reset); the shaft's motion measured since the last mode change,
@@ -94,15 +102,26 @@ pub struct ObserverSettings<T> {
     pub min_transmission: T,
     /// The difference of the averages that is a load bias, rad/s².
     pub bias_limit: T,
+    /// Width of the band around the count's middle inside which the predicted crank
+    /// angle is taken as measured, counts: the state is corrected by the innovation's
+    /// part outside it, 0 inside. An encoder count says the angle lies in its cell (1
+    /// count wide), not at its middle; the quantization error is not white noise but
+    /// follows the state (a slow crank keeps one side of a cell for many steps), so
+    /// corrected by every innovation the twin takes it up as a motion, its speed and
+    /// its torque estimate chattering with the counts. Half a count leaves a twin
+    /// well inside the count's cell as it is and still corrects one at its edge.
+    pub state_band: T,
+    /// The same band for the unknown torque's innovation, counts.
+    pub torque_band: T,
 }
 
 impl<T: Real> ObserverSettings<T> {
     /// The tuning measured on the bench log (README, "The observer").
     pub fn reference() -> Self {
         ObserverSettings {
-            accel_noise: T::c(100.0),
+            accel_noise: T::c(70.0),
             event_speed_var: T::c(1.0),
-            torque_noise: T::c(150.0),
+            torque_noise: T::c(300.0),
             event_torque_var: T::c(5.0),
             torque_limit: T::c(5.0),
             initial_sigma: (T::c(0.2), T::c(2.0), T::c(2.0)),
@@ -113,6 +132,8 @@ impl<T: Real> ObserverSettings<T> {
             bias_time: T::c(0.05),
             min_transmission: T::c(0.3),
             bias_limit: T::c(200.0),
+            state_band: T::c(0.5),
+            torque_band: T::c(0.5),
         }
     }
 }
@@ -161,6 +182,19 @@ fn with_torque<T: Real>(inputs: &Inputs<T>, torque: T) -> (Inputs<T>, bool) {
         law => (law, false),
     };
     (Inputs { motor, ..*inputs }, applied)
+}
+
+/// The part of the innovation `nu` outside a band of width `band` around 0 (both
+/// in rad): 0 inside, the distance to the band's edge outside, with `nu`'s sign.
+fn outside<T: Real>(nu: T, band: T) -> T {
+    let half = band * T::c(0.5);
+    if nu > half {
+        nu - half
+    } else if nu < -half {
+        nu + half
+    } else {
+        T::zero()
+    }
 }
 
 impl<T: Real> TwinObserver<T> {
@@ -264,19 +298,33 @@ impl<T: Real> TwinObserver<T> {
                 if !applied {
                     k[2] = T::zero();
                 }
+                // The count's cell bounds the angle: what the prediction lies outside
+                // of the bands corrects the state and the torque (see the settings).
+                let (nu_d, nu) = (
+                    outside(nu, s.torque_band * res),
+                    outside(nu, s.state_band * res),
+                );
                 // A correction that cannot be made (a group that does not assemble at the
                 // corrected state) leaves the twin at the step's state: the prediction
                 // stands, and so does its covariance.
-                let c = twin
-                    .correct_crank(k[0] * nu, k[1] * nu)
-                    .unwrap_or(Correction::none());
+                // Inside the band the twin is not touched: no re-evaluation, and its
+                // next step keeps DP5's first-same-as-last stage.
+                let c = if nu == T::zero() {
+                    Correction {
+                        applied: true,
+                        ..Correction::none()
+                    }
+                } else {
+                    twin.correct_crank(k[0] * nu, k[1] * nu)
+                        .unwrap_or(Correction::none())
+                };
                 let posterior = prior.update(&k, r);
                 // The update's covariance holds for the correction asked: one cut or
                 // scaled to under half of it (an event function's crossing, a dead
                 // point) keeps the prediction's, and the torque's estimate its own.
                 let asked = (k[0] * nu).abs();
                 let made = c.crank.0.abs();
-                let torque = (self.torque + k[2] * nu)
+                let torque = (self.torque + k[2] * nu_d)
                     .max(-s.torque_limit)
                     .min(s.torque_limit);
                 if c.applied && posterior.finite() && torque.finite() && made + made >= asked {
