@@ -133,6 +133,19 @@ impl BenchLog {
         self.t.last().copied().unwrap_or(0.0)
     }
 
+    /// The log's first `n` samples (all of them if it has fewer).
+    pub fn head(&self, n: usize) -> BenchLog {
+        let n = n.min(self.len());
+        BenchLog {
+            origin: self.origin.clone(),
+            t: self.t[..n].to_vec(),
+            motor: self.motor[..n].to_vec(),
+            load: self.load[..n].to_vec(),
+            crank: self.crank[..n].to_vec(),
+            shaft: self.shaft[..n].to_vec(),
+        }
+    }
+
     /// Reads and validates the bench log at `path`.
     pub fn read(path: &Path) -> Result<BenchLog, LogError> {
         read_with(path, BenchLog::parse)
@@ -280,6 +293,19 @@ pub struct ClutchLog {
 }
 
 impl ClutchLog {
+    /// The events up to time `t` (s), inclusive.
+    pub fn until(&self, t: f64) -> ClutchLog {
+        ClutchLog {
+            origin: self.origin.clone(),
+            events: self
+                .events
+                .iter()
+                .filter(|e| e.time <= t)
+                .copied()
+                .collect(),
+        }
+    }
+
     /// Reads and validates the clutch log at `path`.
     pub fn read(path: &Path) -> Result<ClutchLog, LogError> {
         read_with(path, ClutchLog::parse)

@@ -460,7 +460,8 @@ pub struct IdentifyArgs {
     /// converter.friction.viscous.E)
     #[arg(long, value_name = "KEYS")]
     pub fit: Option<String>,
-    /// Nelder-Mead's iterations at most, of each of its two searches (default 600)
+    /// Nelder-Mead's iterations at most, of each of its searches (two from each start
+    /// of the first horizon, two over the whole log; default 600)
     #[arg(long, value_name = "N")]
     pub max_iters: Option<String>,
     /// The identified converter run file

@@ -1,0 +1,39 @@
+#!/usr/bin/env python3
+"""Writes `known-<T_r>Nm-<motor>Nm.csv` and `..._clutch_log.csv`: the converter of
+`known-machine.toml` (bench1's identified machine, the truth) run by the twin at
+another operating point, in bench1's format (see README.md beside this file).
+
+    python3 make_known_logs.py HOST_SIM LOAD MOTOR SEED
+
+HOST_SIM is a host-sim executable (`target/release/host-sim`); SEED seeds the torque
+sensor's noise (Gaussian, σ 0.02 N·m, Python's `random`)."""
+import csv, math, os, random, subprocess, sys, tempfile
+
+host_sim, load, motor, seed = sys.argv[1], float(sys.argv[2]), float(sys.argv[3]), int(sys.argv[4])
+here = os.path.dirname(os.path.abspath(__file__))
+tag = os.path.join(here, f"known-{load:g}Nm-{motor:g}Nm")
+machine = open(os.path.join(here, "known-machine.toml")).read()
+machine = (machine.replace("load = 800.0", f"load = {load}")
+           .replace("motor = 12.0", f"motor = {motor}")
+           .replace("h = 0.0001", "h = 0.001"))
+with tempfile.TemporaryDirectory() as d:
+    params, out = os.path.join(d, "m.toml"), os.path.join(d, "m.csv")
+    open(params, "w").write(machine)
+    subprocess.run([host_sim, "run", params, "--out", out, "--quiet"], check=True)
+    rows = list(csv.DictReader(open(out)))
+    events = list(csv.DictReader(open(os.path.join(d, "m.events.csv"))))
+random.seed(seed)
+count = 2 * math.pi / 4096
+with open(tag + ".csv", "w") as f:
+    f.write("t,motor_torque,load_torque,crank_counts,shaft_counts\n")
+    for r in rows:
+        # The crank's encoder: floor(θ1 / count); the shaft's: positive in the drive
+        # direction (CW), the twin's shaft angle being CCW.
+        f.write(f"{float(r['t']):.6f},{motor + random.gauss(0, 0.02):.4f},{load:.1f},"
+                f"{math.floor(float(r['theta1']) / count)},"
+                f"{math.floor(-float(r['shaft_angle']) / count)}\n")
+with open(tag + "_clutch_log.csv", "w") as f:
+    f.write("t,event,from,to\n")
+    for e in events:
+        if e["event"] not in ("start", "switch"):
+            f.write(f"{float(e['time']):.6f},{e['event']},{e['from']},{e['to']}\n")
