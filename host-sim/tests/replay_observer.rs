@@ -140,6 +140,55 @@ fn bench1_observed_from_5_degrees_off_follows_the_machine_s_sequence() {
     }
 }
 
+/// The observer at other operating points: the two logs the twin wrote of a known
+/// machine off SPEC's (`tests/data/README.md`: T_r = 1000 N·m with a 14 N·m motor, 800
+/// with 10), replayed with SPEC's nominal parameters as bench1 is above; they stand in
+/// for the issue's kept-back logs. Oracles: each log's own counts and clutch log.
+/// Both keep the machine's sequence, event for event. The rest are regression values
+/// (measured, not the issue's targets of 1 count and 1 ms): crank residual RMS after
+/// 20 ms 1.46 and 2.65 counts; 19 of 20 events within 1 ms (a release 1.26 ms early;
+/// the jam +0.22 ms) and 16 of 21 (the jam 11.9 ms early); and on the 800 N·m log a
+/// `load-bias` at 0.273 s though its load is its set point (a false alarm: README,
+/// "The observer").
+#[test]
+fn the_observer_keeps_a_known_machine_s_sequence_at_other_operating_points() {
+    let dir = TempDir::new("observe-known");
+    let params = spec_from(&dir, 110.0);
+    for (name, rms, within, events) in [
+        ("known-1000Nm-14Nm", 1.55, 19, 20),
+        ("known-800Nm-10Nm", 2.75, 16, 21),
+    ] {
+        let (log, clutch) = (
+            data(&format!("{name}.csv")),
+            data(&format!("{name}_clutch_log.csv")),
+        );
+        let s = replay_of(&[
+            &log,
+            "--params",
+            &params,
+            "--observer",
+            "--clutch-log",
+            &clutch,
+            "--out",
+            &dir.join(&format!("{name}-run.csv")),
+        ]);
+        let o = s.observed.as_ref().expect("the observer's summary");
+        let m = s.matching.as_ref().expect("a clutch log");
+        assert_eq!(m.counts(), (events, events), "{name}: {m}");
+        assert_eq!(m.first_mismatch(), None, "{name}: {m}");
+        assert!(o.residual_settled.rms() <= rms, "{name}: {o}");
+        let n = m
+            .pairs
+            .iter()
+            .filter(|p| p.dt().unwrap().abs() <= 1e-3)
+            .count();
+        assert!(n >= within, "{name}: {n} of {events} within 1 ms: {m}");
+        assert_eq!(o.first("clutch-slip"), None, "{name}: {o}");
+        assert_eq!(o.first("failed-catch"), None, "{name}: {o}");
+        assert_eq!(o.first("crank-encoder-jump"), None, "{name}: {o}");
+    }
+}
+
 /// A slipping clutch injected into bench1 (issue 19: "shift the shaft counts at one
 /// instant"): the shaft's count 8 higher from t = 0.15 s on, where the machine holds
 /// its shaft (I6 from 0.106 s to 0.179 s in its clutch log), is named clutch-slip

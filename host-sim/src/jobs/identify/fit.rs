@@ -31,7 +31,7 @@
 //! whole log from SPEC's machine alone missed issue 19's 0.5 ms on 7 (up to 2.5 ms off,
 //! the crank up to 8.6 counts RMS); the first 0.3 s first, from one start, on 4 (up to
 //! 0.75 ms); from 4 starts on none (every event within 0.26 ms, the crank under 0.6
-//! counts RMS), at 5.2 times the replays (bench1: 6895 against 1319, 25.6 s against
+//! counts RMS), at 5.2 times the replays (bench1: 6891 against 1319, 24.5 s against
 //! 9.8 s on these machines).
 //!
 //! **The uncertainty.** At the optimum, the Jacobian `J` of the residuals by central
@@ -400,7 +400,7 @@ pub fn fit(problem: Problem<'_>, max_iters: u64, quiet: bool) -> Result<Fit, Run
         quiet,
     };
     let whole = problem.log.len();
-    for horizon in HORIZONS {
+    for (k, horizon) in HORIZONS.into_iter().enumerate() {
         let n = ((whole as f64 * horizon).round() as usize).clamp(2, whole);
         if n < whole {
             let log = problem.log.head(n);
@@ -416,15 +416,14 @@ pub fn fit(problem: Problem<'_>, max_iters: u64, quiet: bool) -> Result<Fit, Run
             // The first horizon from several starts, the best of them on: where the
             // residuals are cheapest (a fraction of the log) and the valleys fewest.
             let mut best: Option<(f64, Vec<f64>)> = None;
-            let starts = if horizon == HORIZONS[0] {
+            let starts = if k == 0 {
                 starts(&best_u, STARTS)
             } else {
                 vec![best_u.clone()]
             };
             for start in starts {
-                let u;
-                (stage, u) = search.run(stage, start)?;
-                let cost = stage.cost(&u).unwrap_or(f64::INFINITY);
+                let (u, cost);
+                (stage, u, cost) = search.run(stage, start)?;
                 if best.as_ref().is_none_or(|(c, _)| cost < *c) {
                     best = Some((cost, u));
                 }
@@ -436,7 +435,7 @@ pub fn fit(problem: Problem<'_>, max_iters: u64, quiet: bool) -> Result<Fit, Run
             if !quiet && HORIZONS.len() > 1 {
                 let _ = writeln!(std::io::stderr(), "host-sim: identify: the whole log");
             }
-            (problem, best_u) = search.run(problem, best_u)?;
+            (problem, best_u, _) = search.run(problem, best_u)?;
         }
     }
     let Search {
@@ -488,17 +487,18 @@ struct Search {
 impl Search {
     /// Searches `problem` from the scaled point `start`: a search with a simplex of
     /// [`RESTART_STEPS`]`[0]`, then one restarted from its best with `[1]` (a collapsed
-    /// simplex is Nelder-Mead's known failure on a narrow valley). Returns the problem
-    /// and the best point.
+    /// simplex is Nelder-Mead's known failure on a narrow valley). Returns the problem,
+    /// the best point and its cost (the search's own, no replay more).
     fn run<'b>(
         &mut self,
         problem: Problem<'b>,
         start: Vec<f64>,
-    ) -> Result<(Problem<'b>, Vec<f64>), RunError> {
+    ) -> Result<(Problem<'b>, Vec<f64>, f64), RunError> {
         let (max_iters, quiet) = (self.max_iters, self.quiet);
         let evaluations = Rc::clone(&problem.evaluations);
         let mut problem = problem;
         let mut best_u = start;
+        let mut best_cost = f64::INFINITY;
         for step in RESTART_STEPS {
             let mut simplex = vec![best_u.clone()];
             for i in 0..best_u.len() {
@@ -529,6 +529,7 @@ impl Search {
             let state = &result.state;
             if let Some(b) = state.get_best_param() {
                 best_u = b.clone();
+                best_cost = state.get_best_cost();
             }
             self.iterations += state.get_iter();
             if !self.termination.is_empty() {
@@ -537,7 +538,7 @@ impl Search {
             self.termination
                 .push_str(&state.get_termination_status().to_string());
         }
-        Ok((problem, best_u))
+        Ok((problem, best_u, best_cost))
     }
 }
 
