@@ -200,9 +200,7 @@ fn a_correction_moves_the_crank_and_books_its_energy() {
 /// diagnostic, and stays within 9 counts of the machine's crank (a regression bound,
 /// not the target of 0: in the 2-DOF modes the filter only predicts, and the
 /// torque's estimate, which has no torque to find here, moves with the counts;
-/// measured 8.2 counts in f64 and f32, 18.5 before the state was corrected only
-/// outside half a count around the count's middle; see the README's observer
-/// paragraph).
+/// measured 7.8 counts in f64 and 7.5 in f32; see the README's observer paragraph).
 #[test]
 fn with_no_model_error_the_observer_keeps_the_machine_s_events() {
     fn run<T: Real>() {
@@ -272,10 +270,9 @@ fn injected_faults_are_named_at_their_instants() {
 /// stepped open-loop with 0.5 N·m more on its crank than the observed twin is told
 /// (the motor's constant 12.5 N·m against 12), read through its encoders. The
 /// observer's torque estimate (the oracle: the torque put in) finds it: its mean from
-/// 0.1 s to the end within 0.1 N·m of 0.5 (measured 0.484 in f64, 0.488 in f32; 0.41
-/// before the band of half a count), 85 % of the steps within 0.5 N·m of it
-/// (measured 90 %, 64 % before: the estimate moves with the crank's reversals), no
-/// diagnostic. (With 1.5 N·m the twin's mode sequence parts from the machine's at
+/// 0.1 s to the end within 0.1 N·m of 0.5 (measured 0.462 in f64, 0.459 in f32), 85 %
+/// of the steps within 0.5 N·m of it (measured 90 %: the estimate moves with the
+/// crank's reversals), no diagnostic. (With 1.5 N·m the twin's mode sequence parts from the machine's at
 /// 0.50 s, near the crank's reversal in I6 where the filter does not update, and the
 /// observer loses the machine: README, "The observer".)
 #[test]

@@ -44,9 +44,9 @@ fn edited(dir: &TempDir, name: &str, edit: impl Fn(f64, &mut Vec<String>)) -> St
 /// clutch event within 1 ms". The filter starts from the first count (as a Kalman
 /// filter's state does from its first measurement). Measured, and NOT met in full
 /// (README, "The observer"): the machine's 21 events in the machine's sequence (open
-/// loop the sequences part at the 14th pair), 18 of them within 1 ms of the clutch log
-/// (the second release8 1.8 ms early, a catch6 1.04 ms early, the jam 9.7 ms early),
-/// the crank's residual RMS 2.15 counts after 20 ms (16 at 0.50 s, near the crank's
+/// loop the sequences part at the 14th pair), 19 of them within 1 ms of the clutch log
+/// (the second release8 1.77 ms early, a catch6 1.02 ms early; the jam +0.27 ms),
+/// the crank's residual RMS 2.05 counts after 20 ms (14 at 0.50 s, near the crank's
 /// reversal in I6, where its angle does not observe the state). The bounds below are
 /// those measurements' (regression values), the sequence the clutch log's; the columns
 /// in the CSV; the summary's lines.
@@ -67,11 +67,11 @@ fn bench1_observed_from_5_degrees_off_follows_the_machine_s_sequence() {
         &out,
     ]);
     let o = s.observed.as_ref().expect("the observer's summary");
-    // Regression values (measured 2.15 and 2.25 counts, largest 16): the issue's
+    // Regression values (measured 2.05 and 2.15 counts, largest 14): the issue's
     // target is 1.
-    assert!(o.residual_settled.rms() <= 2.25, "{o}");
-    assert!(o.innovation_settled.rms() <= 2.35, "{o}");
-    assert!(o.residual_settled.largest.0.abs() <= 16, "{o}");
+    assert!(o.residual_settled.rms() <= 2.1, "{o}");
+    assert!(o.innovation_settled.rms() <= 2.2, "{o}");
+    assert!(o.residual_settled.largest.0.abs() <= 14, "{o}");
     let m = s.matching.as_ref().expect("a clutch log");
     assert_eq!(m.counts(), (21, 21), "{m}");
     assert_eq!(m.first_mismatch(), None, "{m}");
@@ -80,12 +80,12 @@ fn bench1_observed_from_5_degrees_off_follows_the_machine_s_sequence() {
         .iter()
         .filter(|p| p.dt().unwrap().abs() <= 1e-3)
         .count();
-    // Regression value (measured 18): the issue's target is all 21.
-    assert!(within >= 18, "{within} of 21 within 1 ms: {m}");
-    // The jam (the machine's at 0.836675 s; the issue's 1 ms): measured 9.7 ms early
-    // (regression value).
+    // Regression value (measured 19): the issue's target is all 21.
+    assert!(within >= 19, "{within} of 21 within 1 ms: {m}");
+    // The jam (the machine's at 0.836675 s) within the issue's 1 ms: measured +0.27 ms
+    // (9.7 ms early while a creeping crank's counts were weighed as independent).
     let jam = m.pairs.last().and_then(|p| p.dt()).unwrap();
-    assert!(jam.abs() <= 10e-3, "the jam {jam} s off: {m}");
+    assert!(jam.abs() <= 1e-3, "the jam {jam} s off: {m}");
     assert_eq!(o.first("clutch-slip"), None, "{o}");
     assert_eq!(o.first("failed-catch"), None, "{o}");
     // Open loop from the same start the sequences part (issue: at 0.33 s from 105°).
@@ -144,19 +144,18 @@ fn bench1_observed_from_5_degrees_off_follows_the_machine_s_sequence() {
 /// machine off SPEC's (`tests/data/README.md`: T_r = 1000 N·m with a 14 N·m motor, 800
 /// with 10), replayed with SPEC's nominal parameters as bench1 is above; they stand in
 /// for the issue's kept-back logs. Oracles: each log's own counts and clutch log.
-/// Both keep the machine's sequence, event for event. The rest are regression values
-/// (measured, not the issue's targets of 1 count and 1 ms): crank residual RMS after
-/// 20 ms 1.46 and 2.65 counts; 19 of 20 events within 1 ms (a release 1.26 ms early;
-/// the jam +0.22 ms) and 16 of 21 (the jam 11.9 ms early); and on the 800 N·m log a
-/// `load-bias` at 0.273 s though its load is its set point (a false alarm: README,
-/// "The observer").
+/// Both keep the machine's sequence, event for event, and raise no diagnostic (their
+/// loads are their set points). The rest are regression values (measured, not the
+/// issue's targets of 1 count and 1 ms): crank residual RMS after 20 ms 1.50 and 2.77
+/// counts; 19 of 20 events within 1 ms (a release 1.29 ms early; the jam -0.07 ms)
+/// and 16 of 21 (the jam +2.8 ms).
 #[test]
 fn the_observer_keeps_a_known_machine_s_sequence_at_other_operating_points() {
     let dir = TempDir::new("observe-known");
     let params = spec_from(&dir, 110.0);
     for (name, rms, within, events) in [
         ("known-1000Nm-14Nm", 1.55, 19, 20),
-        ("known-800Nm-10Nm", 2.75, 16, 21),
+        ("known-800Nm-10Nm", 2.85, 16, 21),
     ] {
         let (log, clutch) = (
             data(&format!("{name}.csv")),
@@ -183,9 +182,7 @@ fn the_observer_keeps_a_known_machine_s_sequence_at_other_operating_points() {
             .filter(|p| p.dt().unwrap().abs() <= 1e-3)
             .count();
         assert!(n >= within, "{name}: {n} of {events} within 1 ms: {m}");
-        assert_eq!(o.first("clutch-slip"), None, "{name}: {o}");
-        assert_eq!(o.first("failed-catch"), None, "{name}: {o}");
-        assert_eq!(o.first("crank-encoder-jump"), None, "{name}: {o}");
+        assert!(o.onsets.is_empty(), "{name}: {o}");
     }
 }
 
@@ -264,9 +261,8 @@ fn a_log_the_twin_wrote_observed_makes_the_same_events() {
         &dir.join("o.csv"),
     ]);
     let o = s.observed.as_ref().unwrap();
-    // Regression values (measured: RMS 0.70 counts, largest 6 at 0.062 s, in I0
-    // before a catch; 1.88 and 19 with every innovation correcting the state): the
-    // issue's target is 0, which the open loop meets (below).
+    // Regression values (measured: RMS 0.68 counts, largest 6 at 0.062 s, in I0
+    // before a catch): the issue's target is 0, which the open loop meets (below).
     assert!(s.crank.largest.0.abs() <= 6, "{}", s.crank);
     assert!(s.crank.rms() <= 0.75, "{}", s.crank);
     assert!(o.onsets.is_empty(), "{o}");
@@ -282,7 +278,7 @@ fn a_log_the_twin_wrote_observed_makes_the_same_events() {
     // motor's input, stays put while the counts agree with the twin).
     assert_eq!(kinds(&a), kinds(&b));
     // Each within 1 ms of the plain replay's but the jam (regression values,
-    // measured: 0.85 ms at worst, the jam 5.5 ms early: the crank creeps into it a
+    // measured: 0.57 ms at worst, the jam 2.6 ms early: the crank creeps into it a
     // count in several ms, where the counts place it least).
     let times = |s: &str| -> Vec<f64> {
         s.lines()
@@ -293,7 +289,7 @@ fn a_log_the_twin_wrote_observed_makes_the_same_events() {
     let (ta, tb) = (times(&a), times(&b));
     let last = ta.len() - 1;
     for (k, (x, y)) in ta.iter().zip(&tb).enumerate() {
-        let bound = if k == last { 6e-3 } else { 1e-3 };
+        let bound = if k == last { 3e-3 } else { 1e-3 };
         assert!((x - y).abs() <= bound, "{k}: {x} {y}");
     }
     assert_eq!(plain.crank.largest.0, 0);

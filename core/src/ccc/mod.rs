@@ -16,7 +16,8 @@ mod observer;
 mod twin;
 
 pub use observer::{
-    BiasWatch, Covariance, Diagnostic, Diagnostics, ObserverSettings, TwinObserver, Update,
+    quantization_variance, BiasWatch, Covariance, Diagnostic, Diagnostics, ObserverSettings,
+    TwinObserver, Update, COUNT_STEPS_MAX,
 };
 pub use twin::{
     energy_tolerance, Audit, Converter, CoordinateSwitch, Correction, Encoder, EncoderResiduals,

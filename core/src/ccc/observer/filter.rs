@@ -15,7 +15,8 @@
 //! spectral density `q` (rad²/s³) and the torque's random walk of density `q_d`
 //! (N²·m²/s): `Q = q [[h³/3, h²/2, 0], [h²/2, h, 0], [0, 0, 0]] + q_d h e₃e₃ᵀ`. The
 //! measurement is the crank encoder's angle, `H = [1, 0, 0]`, with the quantization
-//! noise of an encoder of resolution `Δ`, `R = Δ²/12`. The update's gain
+//! noise of an encoder of resolution `Δ`, `R = n Δ²/12` for a crank that takes `n`
+//! steps to cross a count (1 ≤ n ≤ 100: [`quantization_variance`](super::quantization_variance)). The update's gain
 //! `K = P Hᵀ / (H P Hᵀ + R)` times the innovation is the correction of the twin's state
 //! (its first two terms) and of the torque's estimate (its third), after which the
 //! error's mean is 0 again (the "reset" of the indirect filter) and `P` is updated in

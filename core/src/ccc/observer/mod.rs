@@ -39,7 +39,9 @@
 //! the innovation's part outside a band around the count's middle
 //! ([`ObserverSettings::state_band`], [`ObserverSettings::torque_band`]), so that a
 //! twin the count does not contradict is left as it is rather than made to chatter
-//! with the counts.
+//! with the counts; and a crank that takes `n` steps to cross a count is read with `n`
+//! times the quantization's variance ([`quantization_variance`]): the steps on one
+//! side of a cell share one quantization error.
 //!
 //! The innovations become named diagnostics ([`Diagnostic`]): a crank reading past the
 //! innovation gate is an encoder jump (not used; a few in a row are taken as real and
@@ -197,6 +199,29 @@ fn outside<T: Real>(nu: T, band: T) -> T {
     }
 }
 
+/// The most steps over which one count's quantization error is taken as the same
+/// ([`quantization_variance`]): a crank at rest is read as at 100 steps a count.
+pub const COUNT_STEPS_MAX: f64 = 100.0;
+
+/// The variance of an encoder's angle as a measurement of the crank, rad²: the
+/// quantization's `Δ²/12` (`res` = Δ, rad), times the steps of `h` (s) the crank at
+/// `omega` (rad/s) takes to cross a count, between 1 and [`COUNT_STEPS_MAX`]. A crank
+/// slower than a count a step keeps one side of a cell for those steps, so their
+/// quantization errors are one error, not independent ones: the count's information
+/// comes at the rate the crank crosses counts. Weighted as white noise, the creep of
+/// I6 before bench1's jam (a count every 2 to 5 ms) moved the rocker's speed by a
+/// quarter from step to step, and the corrections that slowed it brought the jam
+/// 9.7 ms early; so weighted, it is within 0.5 ms.
+pub fn quantization_variance<T: Real>(res: T, omega: T, h: T) -> T {
+    let steps = res / (omega.abs() * h);
+    let steps = if steps.finite() {
+        steps.max(T::one()).min(T::c(COUNT_STEPS_MAX))
+    } else {
+        T::c(COUNT_STEPS_MAX)
+    };
+    res * res / T::c(12.0) * steps
+}
+
 impl<T: Real> TwinObserver<T> {
     /// An observer with `settings`, its covariance the initial one.
     pub fn new(settings: ObserverSettings<T>) -> Self {
@@ -271,7 +296,7 @@ impl<T: Real> TwinObserver<T> {
         let measured = inputs.measured;
         if let Some(e) = measured.and_then(|m| m.crank) {
             let res = e.resolution();
-            let r = res * res / T::c(12.0);
+            let r = quantization_variance(res, twin.link(1).omega, h);
             let nu = e.angle() - twin.link(1).theta;
             let var = prior.innovation_variance(r);
             up.innovation = Some(nu);
@@ -415,5 +440,26 @@ impl<T: Real> TwinObserver<T> {
         }
         // Raised once per departure: watched again from here.
         self.shaft_ref = Some((e.counts, angle));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{quantization_variance, COUNT_STEPS_MAX};
+
+    /// `Δ²/12` (a uniform error over one count) times the steps a count takes: 1 at a
+    /// count a step or faster, 4 at a quarter count a step, the cap at rest or for a
+    /// speed that is no number.
+    #[test]
+    fn a_slow_crank_s_count_weighs_as_one_reading_per_count() {
+        let (res, h) = (core::f64::consts::TAU / 4096.0, 1e-3);
+        let white = res * res / 12.0;
+        let at = |omega: f64| quantization_variance(res, omega, h) / white;
+        assert_eq!(at(res / h), 1.0);
+        assert_eq!(at(-10.0 * res / h), 1.0);
+        assert!((at(res / (4.0 * h)) - 4.0).abs() < 1e-12);
+        assert_eq!(at(0.0), COUNT_STEPS_MAX);
+        assert_eq!(at(res / (1e6 * h)), COUNT_STEPS_MAX);
+        assert_eq!(at(f64::NAN), COUNT_STEPS_MAX);
     }
 }
