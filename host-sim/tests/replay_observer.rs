@@ -7,6 +7,7 @@
 //! instant, and a log the twin wrote itself (no model error).
 
 use host_sim::plot::Table;
+use host_sim::run::replay::ReplaySummary;
 use std::f64::consts::TAU;
 
 mod common;
@@ -21,6 +22,21 @@ fn spec_from(dir: &TempDir, deg: f64) -> String {
     let path = dir.join("spec.toml");
     std::fs::write(&path, text).unwrap();
     path
+}
+
+/// `log` replayed on the run file `params` with the observer, matched against its
+/// clutch log `clutch`, the run written to `out`.
+fn observed(log: &str, clutch: &str, params: &str, out: &str) -> ReplaySummary {
+    replay_of(&[
+        log,
+        "--params",
+        params,
+        "--observer",
+        "--clutch-log",
+        clutch,
+        "--out",
+        out,
+    ])
 }
 
 /// bench1 with `edit(t, row)` applied to each data row's cells.
@@ -56,16 +72,7 @@ fn bench1_observed_from_5_degrees_off_follows_the_machine_s_sequence() {
     let params = spec_from(&dir, 110.0);
     let out = dir.join("b1.csv");
     let (log, clutch) = (data("bench1.csv"), data("bench1_clutch_log.csv"));
-    let s = replay_of(&[
-        &log,
-        "--params",
-        &params,
-        "--observer",
-        "--clutch-log",
-        &clutch,
-        "--out",
-        &out,
-    ]);
+    let s = observed(&log, &clutch, &params, &out);
     let o = s.observed.as_ref().expect("the observer's summary");
     // Regression values (measured 2.05 and 2.15 counts, largest 14): the issue's
     // target is 1.
@@ -161,16 +168,12 @@ fn the_observer_keeps_a_known_machine_s_sequence_at_other_operating_points() {
             data(&format!("{name}.csv")),
             data(&format!("{name}_clutch_log.csv")),
         );
-        let s = replay_of(&[
+        let s = observed(
             &log,
-            "--params",
-            &params,
-            "--observer",
-            "--clutch-log",
             &clutch,
-            "--out",
+            &params,
             &dir.join(&format!("{name}-run.csv")),
-        ]);
+        );
         let o = s.observed.as_ref().expect("the observer's summary");
         let m = s.matching.as_ref().expect("a clutch log");
         assert_eq!(m.counts(), (events, events), "{name}: {m}");
