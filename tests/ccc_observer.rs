@@ -153,7 +153,7 @@ fn bad_readings_are_named_errors_and_the_state_is_kept() {
 
 /// A correction of the crank by (1 mrad, 0.05 rad/s) in a 1-DOF mode (I8, the crank
 /// its coordinate) and in a 2-DOF mode (I0): the crank moves by what was asked (to the
-/// second order of the least-norm map, 1e-6 rad and 1e-3 rad/s here), the energy it
+/// second order of the map, 1e-6 rad and 1e-3 rad/s here), the energy it
 /// puts in is booked so that the audit's residual stays where it was (to 1e-12 J)
 /// and equals the change of the kinetic and potential energies, and the twin steps
 /// on from there with its energy balance checked each step.
@@ -197,16 +197,19 @@ fn a_correction_moves_the_crank_and_books_its_energy() {
 /// A twin with no model error (the machine's own twin and inputs), observed through
 /// its encoders in f64 and in f32: it makes the machine's 23 events of S2 in the
 /// machine's order (the same kinds and modes), each within 10 ms, raises no
-/// diagnostic, and stays within 9 counts of the machine's crank (a regression bound,
-/// not the target of 0: in the 2-DOF modes the filter only predicts, and the
-/// torque's estimate, which has no torque to find here, moves with the counts;
-/// measured 7.8 counts in f64 and 7.5 in f32; see the README's observer paragraph).
+/// diagnostic, and stays near the machine's crank. Tuned for nominal parameters,
+/// within 9 counts (a regression bound, not the target of 0: in the 2-DOF
+/// modes the filter only predicts, and the torque's estimate, which has no torque to
+/// find here, moves with the counts; measured 7.8 counts in f64 and 7.5 in f32; see
+/// the README's observer paragraph). Tuned for an identified twin (a model trusted),
+/// within half a count: measured 0 in f64 (the counts never leave the twin's band, so
+/// it is never corrected) and 0.13 in f32.
 #[test]
 fn with_no_model_error_the_observer_keeps_the_machine_s_events() {
-    fn run<T: Real>() {
+    fn run<T: Real>(settings: ObserverSettings<T>, bound: f64) {
         let mut machine = Machine::new();
         let mut t = twin::<T>(105.0);
-        let mut obs = TwinObserver::new(ObserverSettings::reference());
+        let mut obs = TwinObserver::new(settings);
         let res = TAU / f64::from(N);
         let (mut worst, mut ours, mut theirs) = (0.0f64, Vec::new(), Vec::new());
         for k in 0..1000 {
@@ -218,7 +221,7 @@ fn with_no_model_error_the_observer_keeps_the_machine_s_events() {
             theirs.extend(machine.twin.events().iter().map(|e| (e.time, e.kind, e.to)));
             ours.extend(t.events().iter().map(|e| (e.time.to_f64(), e.kind, e.to)));
         }
-        assert!(worst <= 9.0, "{worst} counts off the machine");
+        assert!(worst <= bound, "{worst} counts off the machine");
         assert_eq!(theirs.len(), 23, "S2's events");
         assert_eq!(ours.len(), 23);
         for (a, b) in theirs.iter().zip(&ours) {
@@ -226,8 +229,10 @@ fn with_no_model_error_the_observer_keeps_the_machine_s_events() {
             assert!((a.0 - b.0).abs() <= 0.01, "{a:?} {b:?}");
         }
     }
-    run::<f64>();
-    run::<f32>();
+    run::<f64>(ObserverSettings::reference(), 9.0);
+    run::<f32>(ObserverSettings::reference(), 9.0);
+    run::<f64>(ObserverSettings::identified(), 0.5);
+    run::<f32>(ObserverSettings::identified(), 0.5);
 }
 
 /// Faults injected into the machine's readings at a known step: the shaft's count
@@ -344,4 +349,44 @@ fn the_crank_mobility_is_the_crank_s_acceleration_per_newton_metre() {
         modes.push((a.mode(), a.q().len()));
     }
     assert!(modes.len() >= 3, "{modes:?}");
+}
+
+/// In a 2-DOF mode a correction moves the coordinates along the crank's dynamically
+/// consistent direction `M⁻¹rᵀ / (r M⁻¹ rᵀ)`, the direction a torque on the crank
+/// accelerates them in (`Twin::correct_crank`). Oracle: the twin's own dynamics, not
+/// its mass matrix: two copies in I0 of S2 stepped 0.1 ms with the motor's torque
+/// 0.1 N·m apart part in the coordinates' rates along `M⁻¹rᵀ` (to first order in the
+/// step); the correction's change of the coordinates has their ratio, to 1 %. The
+/// swing moves with the crank (the least-norm map would leave it still).
+#[test]
+fn a_correction_in_a_2_dof_mode_moves_the_coordinates_as_a_crank_torque_does() {
+    let mut s = TwinSettings::reference(1e-4);
+    s.crank = 105f64.to_radians();
+    let mut t = Twin::new(CccParams::reference(), s, s2_inputs(None)).expect("S2 assembles");
+    for _ in 0..400 {
+        t.step(&s2_inputs(None)).expect("S2 steps");
+    }
+    assert_eq!(t.mode(), Mode::I0);
+    let pushed = |d: f64| {
+        let mut u = t.clone();
+        let inputs = Inputs {
+            motor: MotorInput::Torque(12.0 + d),
+            load: 800.0,
+            measured: None,
+        };
+        u.step(&inputs).expect("a step in I0");
+        assert!(u.events().is_empty() && u.mode() == Mode::I0);
+        [u.qd()[0], u.qd()[1]]
+    };
+    let (a, b) = (pushed(0.0), pushed(0.1));
+    let by_torque = (b[1] - a[1]) / (b[0] - a[0]);
+    let q = [t.q()[0], t.q()[1]];
+    let mut c = t.clone();
+    assert!(c.correct_crank(1e-5, 0.0).expect("a correction").applied);
+    let by_correction = (c.q()[1] - q[1]) / (c.q()[0] - q[0]);
+    assert!(
+        (by_correction - by_torque).abs() <= 1e-2 * by_torque.abs(),
+        "{by_correction} against {by_torque}"
+    );
+    assert!(by_torque.abs() > 0.05, "{by_torque}");
 }

@@ -6,9 +6,12 @@ logs written in bench1's format with three seeds of the torque sensor's noise
 
 - `open`: open loop with the machine's own parameters (the control: no model error,
   so the twin should make the machine's events and counts);
-- `exact`: the observer with the machine's own parameters, from its start angle;
-- `nominal`: the observer with SPEC's parameters (`ccc-s2.toml`), from a crank angle
-  5° off (issue 19's case for bench1).
+- `identified`: the observer tuned for an identified twin (`--observer identified`)
+  with the machine's own parameters, from its start angle;
+- `exact-nom`: the same twin with the observer tuned for nominal parameters (the
+  mismatch the tunings are for);
+- `nominal`: the observer tuned for nominal parameters with SPEC's parameters
+  (`ccc-s2.toml`), from a crank angle 5° off (issue 19's case for bench1).
 
 For each replay: whether the twin makes the machine's clutch events in the same order
 (and if not, the first pair that differs), the crank residual's RMS after 20 ms,
@@ -32,10 +35,10 @@ open(nominal, "w").write(spec.replace("crank_deg = 105.0", "crank_deg = 110.0"))
 exact = os.path.join(data, "known-machine.toml")
 
 
-def replay(log, clutch, params, observer, out):
+def replay(log, clutch, params, tuning, out):
     args = [host_sim, "replay", log, "--params", params, "--clutch-log", clutch, "--out", out]
-    if observer:
-        args.append("--observer")
+    if tuning:
+        args += ["--observer", tuning]
     r = subprocess.run(args, capture_output=True, text=True)
     if r.returncode != 0:
         sys.exit(f"replay of {log} failed ({r.returncode}): {r.stderr}")
@@ -66,17 +69,18 @@ for load, motor in OPERATING_POINTS:
                         str(load), str(motor), str(seed), d], check=True)
         log = os.path.join(d, f"known-{load}Nm-{motor}Nm.csv")
         clutch = os.path.join(d, f"known-{load}Nm-{motor}Nm_clutch_log.csv")
-        for name, params, observer in [("open", exact, False), ("exact", exact, True),
-                                       ("nominal", nominal, True)]:
-            r = replay(log, clutch, params, observer, os.path.join(d, f"{name}.csv"))
+        for name, params, tuning in [("open", exact, None), ("identified", exact, "identified"),
+                                     ("exact-nom", exact, "nominal"),
+                                     ("nominal", nominal, "nominal")]:
+            r = replay(log, clutch, params, tuning, os.path.join(d, f"{name}.csv"))
             rows.append((load, motor, seed, name, r))
 
-print(f"{'T_r':>5} {'motor':>5} {'seed':>4} {'replay':8} {'sequence':>22} {'RMS':>8} {'in 1 ms':>8}")
+print(f"{'T_r':>5} {'motor':>5} {'seed':>4} {'replay':10} {'sequence':>22} {'RMS':>8} {'in 1 ms':>8}")
 for load, motor, seed, name, r in rows:
     seq = "same" if r["same"] else f"parts at {r['mismatch']} s"
-    print(f"{load:>5} {motor:>5} {seed:>4} {name:8} {seq:>22} {r['rms']:>8.2f} "
+    print(f"{load:>5} {motor:>5} {seed:>4} {name:10} {seq:>22} {r['rms']:>8.2f} "
           f"{r['within']:>3}/{r['events']:<4}")
-for name in ("open", "exact", "nominal"):
+for name in ("open", "identified", "exact-nom", "nominal"):
     mine = [r for *_, n, r in rows if n == name]
     kept = sum(r["same"] for r in mine)
     good = sum(r["same"] and r["rms"] <= 1.0 for r in mine)

@@ -24,19 +24,47 @@ fn spec_from(dir: &TempDir, deg: f64) -> String {
     path
 }
 
-/// `log` replayed on the run file `params` with the observer, matched against its
-/// clutch log `clutch`, the run written to `out`.
+/// `log` replayed on the run file `params` with the observer (tuned for nominal
+/// parameters), matched against its clutch log `clutch`, the run written to `out`.
 fn observed(log: &str, clutch: &str, params: &str, out: &str) -> ReplaySummary {
+    observed_tuned(log, clutch, params, "nominal", out)
+}
+
+/// [`observed`] with the observer's `tuning` (`nominal` or `identified`).
+fn observed_tuned(log: &str, clutch: &str, params: &str, tuning: &str, out: &str) -> ReplaySummary {
     replay_of(&[
         log,
         "--params",
         params,
         "--observer",
+        tuning,
         "--clutch-log",
         clutch,
         "--out",
         out,
     ])
+}
+
+/// The events of the matching within 1 ms of the machine's.
+fn within_1_ms(m: &host_sim::run::replay::Matching) -> usize {
+    m.pairs
+        .iter()
+        .filter(|p| p.dt().is_some_and(|d| d.abs() <= 1e-3))
+        .count()
+}
+
+/// The observed replay `s` of the log `name` followed the machine: its `events` in the
+/// clutch log's sequence, at least `within` of them within 1 ms, the crank's residual
+/// RMS after 20 ms at most `rms` counts, no diagnostic.
+fn follows(name: &str, s: &ReplaySummary, events: usize, within: usize, rms: f64) {
+    let o = s.observed.as_ref().expect("the observer's summary");
+    let m = s.matching.as_ref().expect("a clutch log");
+    assert_eq!(m.counts(), (events, events), "{name}: {m}");
+    assert_eq!(m.first_mismatch(), None, "{name}: {m}");
+    assert!(o.residual_settled.rms() <= rms, "{name}: {o}");
+    let n = within_1_ms(m);
+    assert!(n >= within, "{name}: {n} of {events} within 1 ms: {m}");
+    assert!(o.onsets.is_empty(), "{name}: {o}");
 }
 
 /// bench1 with `edit(t, row)` applied to each data row's cells.
@@ -82,11 +110,7 @@ fn bench1_observed_from_5_degrees_off_follows_the_machine_s_sequence() {
     let m = s.matching.as_ref().expect("a clutch log");
     assert_eq!(m.counts(), (21, 21), "{m}");
     assert_eq!(m.first_mismatch(), None, "{m}");
-    let within = m
-        .pairs
-        .iter()
-        .filter(|p| p.dt().unwrap().abs() <= 1e-3)
-        .count();
+    let within = within_1_ms(m);
     // Regression value (measured 19): the issue's target is all 21.
     assert!(within >= 19, "{within} of 21 within 1 ms: {m}");
     // The jam (the machine's at 0.836675 s) within the issue's 1 ms: measured +0.27 ms
@@ -174,18 +198,46 @@ fn the_observer_keeps_a_known_machine_s_sequence_at_other_operating_points() {
             &params,
             &dir.join(&format!("{name}-run.csv")),
         );
-        let o = s.observed.as_ref().expect("the observer's summary");
-        let m = s.matching.as_ref().expect("a clutch log");
-        assert_eq!(m.counts(), (events, events), "{name}: {m}");
-        assert_eq!(m.first_mismatch(), None, "{name}: {m}");
-        assert!(o.residual_settled.rms() <= rms, "{name}: {o}");
-        let n = m
-            .pairs
-            .iter()
-            .filter(|p| p.dt().unwrap().abs() <= 1e-3)
-            .count();
-        assert!(n >= within, "{name}: {n} of {events} within 1 ms: {m}");
-        assert!(o.onsets.is_empty(), "{name}: {o}");
+        follows(name, &s, events, within, rms);
+    }
+}
+
+/// The observer tuned for an identified twin (`--observer identified`) on
+/// `known-machine.toml`, bench1's identified machine. On bench1 itself (the real
+/// machine's log; the twin's parameters fitted to it, not the machine's own) it meets
+/// issue 19's marks for an observed twin: crank residual RMS ≤ 1 count after 20 ms
+/// (measured 0.67), every one of the clutch log's 21 events within 1 ms (the worst
+/// 0.88 ms), no diagnostic. On that machine's own logs at four operating points
+/// (`tests/data`, `make_known_logs.py`: 1000/14, 800/10, 600/12 and 400/12 N·m, the
+/// last two the ones where the nominal tuning on the same twin parts from the
+/// machine's sequence, at 0.55 s and 0.43 s) it keeps every sequence with no
+/// diagnostic; the RMS bound is the issue's 1 count (measured 0.44 to 0.60), the
+/// events within 1 ms are regression values (measured: all but one of 36 at 400/12,
+/// 1.9 ms off).
+#[test]
+fn the_identified_tuning_follows_an_identified_twin_s_machine() {
+    let dir = TempDir::new("observe-identified");
+    let params = data("known-machine.toml");
+    for (name, events, within) in [
+        ("bench1", 21, 21),
+        ("known-1000Nm-14Nm", 20, 20),
+        ("known-800Nm-10Nm", 21, 21),
+        ("known-600Nm-12Nm", 21, 21),
+        ("known-400Nm-12Nm", 36, 35),
+    ] {
+        let clutch = if name == "bench1" {
+            data("bench1_clutch_log.csv")
+        } else {
+            data(&format!("{name}_clutch_log.csv"))
+        };
+        let s = observed_tuned(
+            &data(&format!("{name}.csv")),
+            &clutch,
+            &params,
+            "identified",
+            &dir.join(&format!("{name}-run.csv")),
+        );
+        follows(name, &s, events, within, 1.0);
     }
 }
 

@@ -228,9 +228,13 @@ The clutch log (CSV: t, event, from, to; the events and modes in host-sim's name
   machine) and names the first pair that differs (the event, the mode before or
   after), and the events missing or extra at the end.
 
---observer: the core's observer (an error-state Kalman filter on the crank's angle and
-  speed) steps the twin and corrects it from the log's encoders after every step; the
-  crank's count is then absolute (no offset). The CSV gains
+--observer [nominal|identified]: the core's observer (an error-state Kalman filter on
+  the crank's angle and speed) steps the twin and corrects it from the log's encoders
+  after every step; the crank's count is then absolute (no offset). Its tuning is how
+  far it trusts the twin's model: nominal (the default) for the drawing's parameters,
+  identified for a run file that host-sim identify wrote (less process noise, the
+  2-DOF modes corrected too); the tuning of one on the other's twin loses the machine
+  (README, \"The observer\"). The CSV gains
   crank_innovation crank_sigma   the crank's count measured - predicted, and the
                 standard deviation of the angle's error after the update, counts
   shaft_innovation   the shaft's motion since the last mode change, measured - twin,

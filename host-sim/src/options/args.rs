@@ -6,9 +6,9 @@
 //! and repeated options.
 
 use super::{
-    AnimFormat, BatchOptions, DesignOptions, FmuOptions, IdentifyOptions, Output, PlotOptions,
-    ProgressStyle, ReplayOptions, RunOptions, SweepOptions, DEFAULT_FPS, DEFAULT_SLOW, FPS_RANGE,
-    MAX_THREADS, SLOW_RANGE,
+    AnimFormat, BatchOptions, DesignOptions, FmuOptions, IdentifyOptions, ObserverTuning, Output,
+    PlotOptions, ProgressStyle, ReplayOptions, RunOptions, SweepOptions, DEFAULT_FPS, DEFAULT_SLOW,
+    FPS_RANGE, MAX_THREADS, SLOW_RANGE,
 };
 use crate::error::{usage_err, Sci, UsageError};
 use crate::model::bench::{BenchLog, ClutchLog};
@@ -405,9 +405,17 @@ pub struct ReplayArgs {
     /// The state CSV with the encoder residuals; the event and switch logs go next to it
     #[arg(long, value_name = "RUN.csv")]
     pub out: String,
-    /// Correct the twin from the log's encoders every step (the core's observer)
-    #[arg(long)]
-    pub observer: bool,
+    /// Correct the twin from the log's encoders every step (the core's observer), tuned
+    /// for a twin with the drawing's nominal parameters (nominal, the default) or with
+    /// parameters identified from the machine's logs (identified)
+    #[arg(
+        long,
+        value_enum,
+        value_name = "TUNING",
+        num_args = 0..=1,
+        default_missing_value = "nominal"
+    )]
+    pub observer: Option<ObserverTuning>,
     /// No summary
     #[arg(long)]
     pub quiet: bool,

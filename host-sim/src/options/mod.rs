@@ -111,6 +111,18 @@ impl RunOptions {
     }
 }
 
+/// The observer's tuning (`replay --observer TUNING`): how far the twin's model is
+/// trusted, the filter's process noise.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ObserverTuning {
+    /// A twin with the drawing's nominal parameters
+    /// (`structomat::ccc::ObserverSettings::reference`).
+    Nominal,
+    /// A twin whose parameters `host-sim identify` fitted to the machine's logs
+    /// (`ObserverSettings::identified`).
+    Identified,
+}
+
 /// Options of `host-sim replay`: a bench log, read and validated, and the converter to
 /// replay it on.
 #[derive(Clone, Debug, PartialEq)]
@@ -123,8 +135,8 @@ pub struct ReplayOptions {
     pub clutch: Option<(PathBuf, Arc<ClutchLog>)>,
     /// `--out`: the state CSV (its event and switch logs next to it).
     pub out: PathBuf,
-    /// `--observer`: the twin corrected from the log's encoders.
-    pub observer: bool,
+    /// `--observer [TUNING]`: the twin corrected from the log's encoders, so tuned.
+    pub observer: Option<ObserverTuning>,
     /// No summary.
     pub quiet: bool,
 }

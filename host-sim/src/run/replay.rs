@@ -24,7 +24,7 @@ use super::{overwritten, to_files};
 use crate::error::{report_run_error, usage_err, Fig, RunError};
 use crate::model::bench::{encoder_counts, BenchLog, ClutchEvent, ClutchLog, COUNTS_PER_TURN};
 use crate::model::scenarios::{CccScenario, Source};
-use crate::options::{precision, ReplayOptions};
+use crate::options::{precision, ObserverTuning, ReplayOptions};
 use crate::output::{Cell, Observer};
 use std::cell::Cell as Shared;
 use std::fmt;
@@ -535,7 +535,10 @@ pub fn run(opts: &ReplayOptions) -> Result<ReplaySummary, RunError> {
         "the replay",
     )?;
     let clutch = opts.clutch.as_ref().map(|(_, c)| &**c);
-    let observer = opts.observer.then(ObserverSettings::reference);
+    let observer = opts.observer.map(|t| match t {
+        ObserverTuning::Nominal => ObserverSettings::reference(),
+        ObserverTuning::Identified => ObserverSettings::identified(),
+    });
     let mut summary = to_files(&targets, |mut csv| {
         simulate_with::<f64>(&params, settings, &opts.log.1, clutch, observer, &mut csv)
     })?;

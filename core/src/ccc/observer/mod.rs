@@ -19,6 +19,16 @@
 //! crank's encoder; the shaft's encoder is used for the clutch diagnostics, not as a
 //! correction (the shaft follows a lever only while engaged).
 //!
+//! Two tunings. How much the filter corrects is how little it trusts the model (the
+//! process noise is the model's error): [`ObserverSettings::reference`] is for a twin
+//! with a drawing's nominal parameters (masses within ±10 %, friction unknown: large
+//! process noise, the 2-DOF modes only predicted, where a correction of the crank alone
+//! moved the unobserved coordinate the wrong way); [`ObserverSettings::identified`] for
+//! a twin whose parameters were identified from the machine's logs: process noise
+//! small, so the counts' quantization moves the torque estimate little, and the 2-DOF
+//! modes corrected by a fifth of the gain along the crank's dynamically consistent
+//! direction ([`Twin::correct_crank`]).
+//!
 //! The force observer. A correction of the state alone leaves the model's dynamics as
 //! they are, so the twin drifts again between updates and its clutch torques (which
 //! set the releases' and the jam's times) stay the nominal model's. The error state is
@@ -115,10 +125,18 @@ pub struct ObserverSettings<T> {
     pub state_band: T,
     /// The same band for the unknown torque's innovation, counts.
     pub torque_band: T,
+    /// The fraction of the gain by which the crank's innovation corrects the state in a
+    /// 2-DOF mode (I0, A6, A8), 0 to 1; 0: those modes are only predicted. The
+    /// unknown torque is not updated there: the crank's innovation holds the
+    /// unobserved coordinate's error as much as a torque's.
+    pub two_dof_gain: T,
+    /// The band of [`state_band`](Self::state_band) in the 2-DOF modes, counts.
+    pub two_dof_band: T,
 }
 
 impl<T: Real> ObserverSettings<T> {
-    /// The tuning measured on the bench log (README, "The observer").
+    /// The tuning for a twin with the drawing's nominal parameters, measured on the
+    /// bench log with SPEC's (README, "The observer").
     pub fn reference() -> Self {
         ObserverSettings {
             accel_noise: T::c(70.0),
@@ -136,6 +154,32 @@ impl<T: Real> ObserverSettings<T> {
             bias_limit: T::c(200.0),
             state_band: T::c(0.5),
             torque_band: T::c(0.5),
+            two_dof_gain: T::zero(),
+            two_dof_band: T::one(),
+        }
+    }
+
+    /// The tuning for a twin whose parameters were identified from the machine's logs
+    /// (`host-sim identify`): its model error is the identification's (a few tenths of
+    /// a count RMS open loop), so the process noise is a quarter of the reference's in
+    /// acceleration, a sixth in the torque's random walk and a thirtieth at the mode
+    /// changes; the bands are two counts (a twin within its count's cell and the next
+    /// is left as it is); the 2-DOF modes are corrected by a fifth of the gain, with a
+    /// band of one count. Measured on the known machine's logs at five operating points
+    /// (README, "The observer": `checks/observer-sweep`), the bands' and the 2-DOF
+    /// band's neighbourhoods the narrowest (±30 % keeps every log's sequence but the
+    /// 2-DOF band's).
+    pub fn identified() -> Self {
+        ObserverSettings {
+            accel_noise: T::c(18.0),
+            event_speed_var: T::c(0.15),
+            torque_noise: T::c(50.0),
+            event_torque_var: T::c(0.2),
+            state_band: T::c(2.0),
+            torque_band: T::c(2.0),
+            two_dof_gain: T::c(0.2),
+            two_dof_band: T::one(),
+            ..Self::reference()
         }
     }
 }
@@ -304,13 +348,20 @@ impl<T: Real> TwinObserver<T> {
             let gate = s.jump_gate * var.root();
             let jump = nu.abs() > gate && nu.abs() > s.jump_counts * res;
             // In a 2-DOF mode (I0, A6, A8) the crank's encoder observes one coordinate
-            // of two: a correction of it alone, the other held, feeds the count's
-            // quantization into the unobserved one (with no model error the twin left
-            // the machine's mode sequence at 0.22 s of S2 so), so there the filter only
-            // predicts; the 1-DOF modes (I6, I8, A68), where the crank is the whole
-            // state, take the update.
+            // of two: a full correction there feeds the count's quantization into the
+            // unobserved one (with no model error the twin left the machine's mode
+            // sequence at 0.22 s of S2 so), so there the filter corrects by
+            // `two_dof_gain` of its gain (0: it only predicts); the 1-DOF modes (I6,
+            // I8, A68), where the crank is the whole state, take the whole update.
+            let two_dof = twin.q().len() == 2;
+            let [r0, r1] = twin.crank_transmission();
+            let transmission = if two_dof {
+                (r0 * r0 + r1 * r1).root()
+            } else {
+                r0.abs()
+            };
             let observable =
-                twin.q().len() == 1 && twin.crank_transmission()[0].abs() >= s.min_transmission;
+                (!two_dof || s.two_dof_gain > T::zero()) && transmission >= s.min_transmission;
             if jump && self.jumps < s.jump_run {
                 self.jumps += 1;
                 up.diagnostics.insert(Diagnostic::EncoderJump("crank"));
@@ -320,15 +371,19 @@ impl<T: Real> TwinObserver<T> {
                 }
                 self.jumps = 0;
                 let mut k = prior.gain(r);
+                let mut band = s.state_band;
+                if two_dof {
+                    k[0] *= s.two_dof_gain;
+                    k[1] *= s.two_dof_gain;
+                    k[2] = T::zero();
+                    band = s.two_dof_band;
+                }
                 if !applied {
                     k[2] = T::zero();
                 }
                 // The count's cell bounds the angle: what the prediction lies outside
                 // of the bands corrects the state and the torque (see the settings).
-                let (nu_d, nu) = (
-                    outside(nu, s.torque_band * res),
-                    outside(nu, s.state_band * res),
-                );
+                let (nu_d, nu) = (outside(nu, s.torque_band * res), outside(nu, band * res));
                 // A correction that cannot be made (a group that does not assemble at the
                 // corrected state) leaves the twin at the step's state: the prediction
                 // stands, and so does its covariance.
