@@ -16,8 +16,8 @@ pub enum Diagnostic {
     ClutchSlip,
     /// The shaft stood where the twin's mode turns it: a clutch that failed to catch.
     FailedCatch,
-    /// The crank's acceleration corrections, averaged while the shaft turns, depart
-    /// from those while it is held: the load differs from its set point.
+    /// The unknown torque's estimate, averaged while the shaft turns, departs from its
+    /// average while the shaft is held: the load differs from its set point.
     LoadBias,
 }
 
@@ -84,13 +84,14 @@ impl Diagnostics {
     }
 }
 
-/// The load-bias detector: the crank's acceleration corrections (rad/s², the speed
-/// correction over the step) averaged exponentially over `time` while the shaft turns
-/// and while it is held; a load off its set point acts only while the shaft turns, the
-/// model's other errors (friction, inertias, the motor's torque) in both.
+/// The load-bias detector: the unknown torque's estimate on the crank (N·m) averaged
+/// exponentially while the shaft turns and while it is held; a load off its set point
+/// acts only while the shaft turns, the model's other errors (friction, inertias, the
+/// motor's torque) in both. On an identified twin (whose other errors are small) the
+/// difference is the load's; on a nominal one it is the model's.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct BiasWatch<T> {
-    /// The averages `[turning, held]`, rad/s².
+    /// The averages `[turning, held]`, N·m.
     pub mean: [T; 2],
     /// Seconds averaged into each, capped at the time constant.
     pub weight: [T; 2],
@@ -111,8 +112,8 @@ impl<T: Real> BiasWatch<T> {
         }
     }
 
-    /// Adds the acceleration correction `a` (rad/s²) of a step of `h` (s), `turning`
-    /// or held, to its average of time constant `tau` (s).
+    /// Adds the value `a` (N·m) of a step of `h` (s), `turning` or held, to its
+    /// average of time constant `tau` (s).
     pub fn add(&mut self, a: T, h: T, turning: bool, tau: T) {
         let k = usize::from(!turning);
         if let (Some(m), Some(w)) = (self.mean.get_mut(k), self.weight.get_mut(k)) {
@@ -122,7 +123,7 @@ impl<T: Real> BiasWatch<T> {
         }
     }
 
-    /// The turning average less the held one, rad/s², once each has averaged a whole
+    /// The turning average less the held one, N·m, once each has averaged a whole
     /// time constant `tau` (s).
     pub fn bias(&self, tau: T) -> Option<T> {
         let [t, hd] = self.weight;

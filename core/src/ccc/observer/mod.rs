@@ -106,13 +106,14 @@ pub struct ObserverSettings<T> {
     /// The shaft's motion off the mode's (counts, since the last mode change) that is a
     /// clutch diagnostic.
     pub slip_counts: T,
-    /// Time constant of the load-bias averages, s.
+    /// Time constant of the load-bias averages of the unknown torque's estimate, s.
     pub bias_time: T,
     /// The least `|∂θ1/∂q|` at which the crank's angle corrects the state: near the
     /// crank's reversals (0 there) its angle hardly moves with the state, and a crank
     /// correction is a large, noisy change of the coordinate.
     pub min_transmission: T,
-    /// The difference of the averages that is a load bias, rad/s².
+    /// The difference of the averages (turning less held) that is a load bias, N·m;
+    /// not finite: the diagnostic is off.
     pub bias_limit: T,
     /// Width of the band around the count's middle inside which the predicted crank
     /// angle is taken as measured, counts: the state is corrected by the innovation's
@@ -149,9 +150,12 @@ impl<T: Real> ObserverSettings<T> {
             jump_counts: T::c(16.0),
             jump_run: 5,
             slip_counts: T::c(4.0),
-            bias_time: T::c(0.05),
+            bias_time: T::c(0.1),
             min_transmission: T::c(0.3),
-            bias_limit: T::c(200.0),
+            // Off: on a nominal twin the estimate's turning and held averages differ
+            // by the model's errors, not the load's (by 3.7 N·m on bench1 at its set
+            // point, as much as with its load column at 600 or 1000 N·m).
+            bias_limit: T::c(f64::INFINITY),
             state_band: T::c(0.5),
             torque_band: T::c(0.5),
             two_dof_gain: T::zero(),
@@ -179,6 +183,10 @@ impl<T: Real> ObserverSettings<T> {
             torque_band: T::c(2.0),
             two_dof_gain: T::c(0.2),
             two_dof_band: T::one(),
+            // bench1 on its identified twin: the averages differ by at most 0.23 N·m
+            // at the log's load, by 1.0 to 1.3 N·m with its load column at 600, 700
+            // or 1000 N·m (the machine ran at 800); the known machine's logs, 0.12.
+            bias_limit: T::c(0.6),
             ..Self::reference()
         }
     }
@@ -412,19 +420,19 @@ impl<T: Real> TwinObserver<T> {
                     self.torque = torque;
                     up.torque = torque;
                 }
-                self.bias
-                    .add(c.crank.1 / h, h, twin.mode().shaft_turning(), s.bias_time);
-                if self
-                    .bias
-                    .bias(s.bias_time)
-                    .is_some_and(|b| b.abs() > s.bias_limit)
-                {
-                    up.diagnostics.insert(Diagnostic::LoadBias);
-                }
                 up.correction = Some(c);
             }
             if !jump {
                 self.jumps = 0;
+            }
+            self.bias
+                .add(self.torque, h, twin.mode().shaft_turning(), s.bias_time);
+            if self
+                .bias
+                .bias(s.bias_time)
+                .is_some_and(|b| b.abs() > s.bias_limit)
+            {
+                up.diagnostics.insert(Diagnostic::LoadBias);
             }
         }
         self.p = prior;
