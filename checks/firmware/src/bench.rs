@@ -1,15 +1,17 @@
 //! The twin following a machine on the target: the prototype's bench log `bench1`
 //! (`host-sim/tests/data/bench1.csv`, compiled in) replayed as `host-sim replay
-//! --observer` replays it on the PC. SPEC's nominal converter at the log's 1 ms, the
-//! log's measured motor torque and load each step, and the crank's and the shaft's
-//! counts at the step's end into a [`TwinObserver`].
+//! --observer` replays it on the PC, twice ([`Tuning`]): on SPEC's nominal converter
+//! with the nominal tuning (`bench1-observed`), and on bench1's identified converter
+//! with the identified tuning (`bench1-identified`, as `replay --params
+//! known-machine.toml --observer identified`). The log's 1 ms, its measured motor
+//! torque and load each step, and the crank's and the shaft's counts at the step's
+//! end into a [`TwinObserver`].
 //!
-//! What the run prints (the first two kinds must equal the host's):
-//! - `bench1-observed event ...` for every step with an event, a switch or a mode
-//!   change;
-//! - `bench1-observed digest <hex> steps <n> t <t_end>`: every step's twin outputs
+//! What each run prints (the first two kinds must equal the host's; `<run>` its name):
+//! - `<run> event ...` for every step with an event, a switch or a mode change;
+//! - `<run> digest <hex> steps <n> t <t_end>`: every step's twin outputs
 //!   ([`hash_twin`]) and the observer's innovation and torque estimate;
-//! - on the target, `bench1-observed count observer mean .. worst .. step .. plain
+//! - on the target, `<run> count observer mean .. worst .. step .. plain
 //!   mean .. worst .. ratio-permille ..`: the instructions of each observer step, and of
 //!   a plain [`Twin::step`] from the same state under the same inputs (a copy of the
 //!   twin stepped beside it, not counted into the other), and the ratio of their sums
@@ -27,8 +29,41 @@ const COUNTS_PER_TURN: u32 = 4096;
 /// The log's period, s.
 const PERIOD: f64 = 1e-3;
 
-/// The records' first word.
-const NAME: &str = "bench1-observed";
+/// The converter and the observer's tuning of a bench1 run.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Tuning {
+    /// SPEC's converter, [`ObserverSettings::reference`].
+    Nominal,
+    /// bench1's identified converter ([`identified_converter`]),
+    /// [`ObserverSettings::identified`].
+    Identified,
+}
+
+impl Tuning {
+    /// The records' first word.
+    fn name(self) -> &'static str {
+        match self {
+            Tuning::Nominal => "bench1-observed",
+            Tuning::Identified => "bench1-identified",
+        }
+    }
+}
+
+/// bench1's identified machine: SPEC's converter with the values of
+/// `host-sim/tests/data/known-machine.toml` (`host-sim identify` of bench1: the
+/// oscillating mass, the coupler's and the rocker's masses, viscous friction at A, B
+/// and E), so that this run is the PC's `replay --params known-machine.toml`.
+pub fn identified_converter<T: Real>() -> CccParams<T> {
+    let mut p = CccParams::reference();
+    p.mass = T::c(6.480953748182883);
+    p.links[1].mass = T::c(2.8585363092165066);
+    p.links[2].mass = T::c(5.362709443504636);
+    // FRICTION_JOINTS' A, B and E.
+    p.friction.viscous[0] = T::c(0.049121364498234496);
+    p.friction.viscous[1] = T::c(0.0138649815303933);
+    p.friction.viscous[3] = T::c(0.014060564719278522);
+    p
+}
 
 /// One row of the log; the torques as decimals ([`decimal`]).
 #[derive(Clone, Copy, Debug)]
@@ -98,9 +133,9 @@ fn encoder<T: Real>(counts: i64) -> Encoder<T> {
     }
 }
 
-/// bench1 observed, from twins built into `twin_slot` (the observed one) and
-/// `plain_slot` (each step's copy, stepped plainly); `counts` holds twice the log's
-/// steps (the observer's counts, then the plain steps').
+/// bench1 observed with `tuning`, from twins built into `twin_slot` (the observed one)
+/// and `plain_slot` (each step's copy, stepped plainly); `counts` holds twice the
+/// log's steps (the observer's counts, then the plain steps').
 #[inline(never)]
 pub fn run_bench1<T: Real, C: Counter, W: Write>(
     twin_slot: &mut MaybeUninit<Twin<T>>,
@@ -108,9 +143,11 @@ pub fn run_bench1<T: Real, C: Counter, W: Write>(
     counts: &mut [u32],
     counter: &mut C,
     out: &mut W,
+    tuning: Tuning,
 ) -> Result<(), Failed> {
+    let name = tuning.name();
     let Some(Some(first)) = samples().next() else {
-        record!(out, "{NAME} error: bench1's first row does not parse");
+        record!(out, "{name} error: bench1's first row does not parse");
         return Err(Failed);
     };
     // The filter starts from the first measurement: the crank at the middle of the
@@ -122,14 +159,18 @@ pub fn run_bench1<T: Real, C: Counter, W: Write>(
         load: value(first.load),
         measured: None,
     };
-    let twin = match new_twin(twin_slot, settings, start) {
+    let (params, observer_settings) = match tuning {
+        Tuning::Nominal => (CccParams::reference(), ObserverSettings::reference()),
+        Tuning::Identified => (identified_converter(), ObserverSettings::identified()),
+    };
+    let twin = match Twin::new_in(twin_slot, params, settings, start) {
         Ok(t) => t,
         Err(e) => {
-            record!(out, "{NAME} error new: {e}");
+            record!(out, "{name} error new: {e}");
             return Err(Failed);
         }
     };
-    let mut observer = TwinObserver::new(ObserverSettings::reference());
+    let mut observer = TwinObserver::new(observer_settings);
     let steps = (samples().count().saturating_sub(1)).min(counts.len() / 2);
     let (observed_counts, rest) = counts.split_at_mut(steps);
     let plain_counts = &mut rest[..steps];
@@ -137,7 +178,7 @@ pub fn run_bench1<T: Real, C: Counter, W: Write>(
     let mut now = first;
     for (k, next) in samples().skip(1).take(steps).enumerate() {
         let Some(next) = next else {
-            record!(out, "{NAME} error: bench1's row {} does not parse", k + 2);
+            record!(out, "{name} error: bench1's row {} does not parse", k + 2);
             return Err(Failed);
         };
         // Step k + 1 ends at sample k + 1: what the encoders read there.
@@ -155,7 +196,7 @@ pub fn run_bench1<T: Real, C: Counter, W: Write>(
         let stepped = plain.step(&inputs);
         let c_plain = counter.stop();
         if let Err(e) = stepped {
-            record!(out, "{NAME} error plain step {k}: {e}");
+            record!(out, "{name} error plain step {k}: {e}");
             return Err(Failed);
         }
         let before = (twin.mode(), twin.coordinates());
@@ -165,7 +206,7 @@ pub fn run_bench1<T: Real, C: Counter, W: Write>(
         let up = match observed {
             Ok(up) => up,
             Err(e) => {
-                record!(out, "{NAME} error step {k}: {e}");
+                record!(out, "{name} error step {k}: {e}");
                 return Err(Failed);
             }
         };
@@ -179,13 +220,13 @@ pub fn run_bench1<T: Real, C: Counter, W: Write>(
             if event_line(&mut line, k as u32, before, twin).is_err() {
                 return Err(Failed);
             }
-            record!(out, "{NAME} event {line}");
+            record!(out, "{name} event {line}");
         }
         now = next;
     }
     record!(
         out,
-        "{NAME} digest {:016x} steps {steps} t {:.6}",
+        "{name} digest {:016x} steps {steps} t {:.6}",
         d.value(),
         twin.time().to_f64()
     );
@@ -196,7 +237,7 @@ pub fn run_bench1<T: Real, C: Counter, W: Write>(
         let p = Stats::of(plain_counts);
         record!(
             out,
-            "{NAME} count observer mean {} median {} worst {} step {} plain mean {} median {} worst {} ratio-permille {ratio}",
+            "{name} count observer mean {} median {} worst {} step {} plain mean {} median {} worst {} ratio-permille {ratio}",
             o.mean,
             o.median,
             o.worst,

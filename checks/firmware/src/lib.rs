@@ -325,7 +325,9 @@ pub fn run_all<T: Real, C: Counter, W: Write>(
         run_s2(twin_slot, counts, counter, out, run, perturbed)?;
     }
     if !perturbed {
-        bench::run_bench1(twin_slot, plain_slot, counts, counter, out)?;
+        for tuning in [bench::Tuning::Nominal, bench::Tuning::Identified] {
+            bench::run_bench1(twin_slot, plain_slot, counts, counter, out, tuning)?;
+        }
     }
     counter.paint();
     run_five_bar(sim_slot, counter, out)
