@@ -233,7 +233,7 @@ The clutch log (CSV: t, event, from, to; the events and modes in host-sim's name
   after every step; the crank's count is then absolute (no offset). Its tuning is how
   far it trusts the twin's model: nominal (the default) for the drawing's parameters,
   identified for a run file that host-sim identify wrote (less process noise, the
-  2-DOF modes corrected too); the tuning of one on the other's twin loses the machine
+  2-DOF modes corrected too); each follows the machine worse on the other's twin
   (README, \"The observer\"). The CSV gains
   crank_innovation crank_sigma   the crank's count measured - predicted, and the
                 standard deviation of the angle's error after the update, counts
