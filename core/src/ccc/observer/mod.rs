@@ -169,10 +169,10 @@ impl<T: Real> ObserverSettings<T> {
     /// acceleration, a sixth in the torque's random walk and a thirtieth at the mode
     /// changes; the bands are two counts (a twin within its count's cell and the next
     /// is left as it is); the 2-DOF modes are corrected by a fifth of the gain, with a
-    /// band of one count. Measured on the known machine's logs at five operating points
-    /// (README, "The observer": `checks/observer-sweep`), the bands' and the 2-DOF
-    /// band's neighbourhoods the narrowest (±30 % keeps every log's sequence but the
-    /// 2-DOF band's).
+    /// band of one count. Chosen on the known machine's logs at five operating points
+    /// (README, "The observer": `checks/observer-sweep`), where it keeps all 15
+    /// sequences; each value ×0.7 or ×1.4 keeps 13 to 15 of them but the 2-DOF band
+    /// ×1.4 (10), the torque band ×0.7 (13) and the 2-DOF band the narrowest.
     pub fn identified() -> Self {
         ObserverSettings {
             accel_noise: T::c(18.0),
