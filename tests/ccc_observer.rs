@@ -198,9 +198,9 @@ fn a_correction_moves_the_crank_and_books_its_energy() {
 /// its encoders in f64 and in f32: it makes the machine's 23 events of S2 in the
 /// machine's order (the same kinds and modes), each within 10 ms, raises no
 /// diagnostic, and stays near the machine's crank. Tuned for nominal parameters,
-/// within 9 counts (a regression bound, not the target of 0: in the 2-DOF
-/// modes the filter only predicts, and the torque's estimate, which has no torque to
-/// find here, moves with the counts; measured 7.8 counts in f64 and 7.5 in f32; see
+/// within 3.5 counts (a regression bound: the torque's and friction's estimates,
+/// which have nothing to find here, move with the counts; measured 2.89 counts in f64
+/// and 2.59 in f32, 7.8 and 7.5 before the friction's estimate and its tuning; see
 /// the README's observer paragraph). Tuned for an identified twin (a model trusted),
 /// within half a count: measured 0 in f64 (the counts never leave the twin's band, so
 /// it is never corrected) and 0.13 in f32.
@@ -221,6 +221,7 @@ fn with_no_model_error_the_observer_keeps_the_machine_s_events() {
             theirs.extend(machine.twin.events().iter().map(|e| (e.time, e.kind, e.to)));
             ours.extend(t.events().iter().map(|e| (e.time.to_f64(), e.kind, e.to)));
         }
+        eprintln!("{worst} counts off the machine at worst");
         assert!(worst <= bound, "{worst} counts off the machine");
         assert_eq!(theirs.len(), 23, "S2's events");
         assert_eq!(ours.len(), 23);
@@ -229,8 +230,8 @@ fn with_no_model_error_the_observer_keeps_the_machine_s_events() {
             assert!((a.0 - b.0).abs() <= 0.01, "{a:?} {b:?}");
         }
     }
-    run::<f64>(ObserverSettings::reference(), 9.0);
-    run::<f32>(ObserverSettings::reference(), 9.0);
+    run::<f64>(ObserverSettings::reference(), 3.5);
+    run::<f32>(ObserverSettings::reference(), 3.5);
     run::<f64>(ObserverSettings::identified(), 0.5);
     run::<f32>(ObserverSettings::identified(), 0.5);
 }
@@ -273,13 +274,12 @@ fn injected_faults_are_named_at_their_instants() {
 
 /// The force observer on a machine with a known torque the model lacks: S2's twin
 /// stepped open-loop with 0.5 N·m more on its crank than the observed twin is told
-/// (the motor's constant 12.5 N·m against 12), read through its encoders. The
-/// observer's torque estimate (the oracle: the torque put in) finds it: its mean from
-/// 0.1 s to the end within 0.1 N·m of 0.5 (measured 0.462 in f64, 0.459 in f32), 85 %
-/// of the steps within 0.5 N·m of it (measured 90 %: the estimate moves with the
-/// crank's reversals), no diagnostic. (With 1.5 N·m the twin's mode sequence parts from the machine's at
-/// 0.50 s, near the crank's reversal in I6 where the filter does not update, and the
-/// observer loses the machine: README, "The observer".)
+/// (the motor's constant 12.5 N·m against 12), read through its encoders. The torque
+/// the observer adds on the crank, `d - c ω1` (its torque and friction estimates; the
+/// oracle: the torque put in), finds it: its mean from 0.1 s to the end within 0.1 N·m
+/// of 0.5 (measured 0.484 in f64, 0.431 in f32), 70 % of the steps within 0.5 N·m of it
+/// (measured 75 % and 74 %: the nominal tuning carries the model's error in the
+/// estimates, which move with the crank's reversals and mode changes), no diagnostic.
 #[test]
 fn the_torque_estimate_finds_a_known_extra_torque_on_the_crank() {
     fn run<T: Real>() -> Vec<f64> {
@@ -304,7 +304,9 @@ fn the_torque_estimate_finds_a_known_extra_torque_on_the_crank() {
             );
             let up = obs.step(&mut t, &s2_inputs(Some(reading(c)))).unwrap();
             assert!(up.diagnostics.is_empty(), "{:?}", up.diagnostics);
-            estimates.push(obs.torque().to_f64());
+            // The torque the observer adds on the crank: `d - c ω1`.
+            let w = t.link(1).omega.to_f64();
+            estimates.push(obs.torque().to_f64() - obs.friction().to_f64() * w);
         }
         estimates
     }
@@ -315,8 +317,69 @@ fn the_torque_estimate_finds_a_known_extra_torque_on_the_crank() {
         let near = near as f64 / late.len() as f64;
         eprintln!("{name}: mean {mean}, {near} of the steps within 0.5 N·m");
         assert!((mean - 0.5).abs() <= 0.1, "{name}: mean {mean}");
-        assert!(near >= 0.85, "{name}: {near}");
+        assert!(near >= 0.7, "{name}: {near}");
     }
+}
+
+/// The friction observer on a machine with a known friction the model lacks: S2's twin
+/// stepped open-loop with a viscous friction of 0.05 N·m·s/rad in the crank's bearing
+/// A (bench1's identified machine has 0.049 there), read through its encoders,
+/// observed on S2's frictionless twin with the nominal tuning, and with the same
+/// tuning without the friction's estimate (`friction_sigma` and `friction_noise` 0:
+/// the three-state filter). The oracle is the machine's true crank angle: with the
+/// estimate the twin's crank is closer to it after the first 0.1 s (RMS: measured 1.21
+/// counts against 1.42 in f64, 1.18 against 1.41 in f32), the estimate is within 0.02
+/// of the coefficient put in on average over the last half second (measured 0.040 in
+/// both: the torque's estimate takes part of the friction's mean), and no diagnostic
+/// is raised.
+#[test]
+fn the_friction_estimate_finds_a_known_friction_of_the_crank_s_bearing() {
+    fn run<T: Real>(settings: ObserverSettings<T>) -> (f64, f64) {
+        let c_true = 0.05;
+        let mut p = CccParams::<f64>::reference();
+        p.friction.viscous[0] = c_true;
+        let mut s = TwinSettings::reference(H);
+        s.crank = 105f64.to_radians();
+        let mut machine = Twin::new(p, s, s2_inputs(None)).expect("S2 assembles");
+        let mut t = twin::<T>(105.0);
+        let mut obs = TwinObserver::new(settings);
+        let res = TAU / f64::from(N);
+        let (mut off2, mut c_sum, mut n) = (0.0, 0.0, 0.0);
+        for k in 0..1000 {
+            machine.step(&s2_inputs(None)).expect("the machine steps");
+            let c = (
+                counts(machine.link(1).theta),
+                counts(machine.shaft_drive_angle()),
+            );
+            let up = obs.step(&mut t, &s2_inputs(Some(reading(c)))).unwrap();
+            assert!(up.diagnostics.is_empty(), "step {k}: {:?}", up.diagnostics);
+            if k >= 100 {
+                off2 += ((t.link(1).theta.to_f64() - machine.link(1).theta) / res).powi(2);
+            }
+            if k >= 500 {
+                c_sum += obs.friction().to_f64();
+                n += 1.0;
+            }
+        }
+        ((off2 / 900.0).sqrt(), c_sum / n)
+    }
+    fn both<T: Real>(name: &str) {
+        let with = run::<T>(ObserverSettings::reference());
+        let without = run::<T>(ObserverSettings {
+            friction_sigma: T::zero(),
+            friction_noise: T::zero(),
+            ..ObserverSettings::reference()
+        });
+        eprintln!(
+            "{name}: crank {} counts RMS off the machine with the friction's estimate ({} N·m·s/rad on average), {} without",
+            with.0, with.1, without.0
+        );
+        assert!(with.0 < without.0, "{name}: {with:?} against {without:?}");
+        assert!((with.1 - 0.05).abs() <= 0.02, "{name}: {}", with.1);
+        assert_eq!(without.1, 0.0);
+    }
+    both::<f64>("f64");
+    both::<f32>("f32");
 }
 
 /// `Twin::crank_mobility` (`r M⁻¹ rᵀ`, the force observer's `b`) against the twin's
