@@ -13,7 +13,7 @@
 
 use std::hint::black_box;
 use std::mem::{size_of, MaybeUninit};
-use structomat::ccc::{CccParams, Inputs, MotorInput, Twin, TwinSettings};
+use structomat::ccc::{CccParams, Inputs, MotorInput, Twin, TwinObserver, TwinSettings};
 use structomat::mechanisms::{five_bar, slider_crank};
 use structomat::model::Model;
 use structomat::motor::Motor;
@@ -261,10 +261,12 @@ fn static_sizes_fit_the_budget() {
         ("Simulation<f32>", size_of::<Simulation<f32>>()),
         ("Twin<f64>", size_of::<Twin<f64>>()),
         ("Twin<f32>", size_of::<Twin<f32>>()),
+        ("TwinObserver<f64>", size_of::<TwinObserver<f64>>()),
+        ("TwinObserver<f32>", size_of::<TwinObserver<f32>>()),
     ];
     for (name, bytes) in rows {
         println!(
-            "{name:16} {bytes:7} B  {:6.1} KiB",
+            "{name:18} {bytes:7} B  {:6.1} KiB",
             bytes as f64 / KIB as f64
         );
     }

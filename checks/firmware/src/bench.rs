@@ -215,6 +215,7 @@ pub fn run_bench1<T: Real, C: Counter, W: Write>(
         hash_twin(&mut d, twin);
         d.real(up.innovation.unwrap_or(T::zero()));
         d.real(up.torque);
+        d.real(up.friction);
         if !twin.events().is_empty() || !twin.switches().is_empty() || before.0 != twin.mode() {
             let mut line = Line::new();
             if event_line(&mut line, k as u32, before, twin).is_err() {

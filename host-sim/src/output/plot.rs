@@ -346,9 +346,9 @@ const DIAGNOSTICS: [(&str, &str); 5] = [
 
 /// An observed replay's panels (`None` without its columns): the crank's innovation
 /// (measured - predicted) beside its residual after the update (measured - corrected
-/// twin), the unknown torque on the crank it estimates, the shaft's innovation since the
-/// last mode change, and each diagnostic's count of steps raised so far (a step line
-/// that rises where the diagnostic fires).
+/// twin), the unknown torque on the crank and its bearing's friction it estimates, the
+/// shaft's innovation since the last mode change, and each diagnostic's count of steps
+/// raised so far (a step line that rises where the diagnostic fires).
 fn observer_figure(table: &Table) -> Option<Vec<Plot>> {
     let t = table.column("t")?;
     table.column("crank_innovation")?;
@@ -391,6 +391,18 @@ fn observer_figure(table: &Table) -> Option<Vec<Plot>> {
                 "Unknown torque on the crank the filter estimates (added to the motor's)",
                 "torque, N·m",
                 &[("crank_torque_estimate", "estimate")],
+            ),
+        );
+    }
+    if table.column("crank_friction_estimate").is_some() {
+        let at = panels.len() - 2;
+        panels.insert(
+            at,
+            plot(
+                table,
+                "Viscous friction of the crank's bearing the filter estimates (its torque -c ω1 added to the motor's)",
+                "N·m·s/rad",
+                &[("crank_friction_estimate", "estimate")],
             ),
         );
     }
@@ -517,26 +529,28 @@ mod tests {
             .contains("line 3"));
     }
 
-    /// An observed replay's figure: the crank's two series and the torque estimate as
-    /// the CSV's columns, each diagnostic's running count of the steps that raised it
+    /// An observed replay's figure: the crank's two series and the torque and friction
+    /// estimates as the CSV's columns, each diagnostic's running count of the steps that raised it
     /// (the first row, no step yet, empty), counted here by hand; none without the
     /// observer's columns.
     #[test]
     fn observer_panels_count_the_diagnostics() {
         let csv = "t,crank_residual,crank_innovation,crank_sigma,shaft_innovation,\
-crank_jump,shaft_jump,clutch_slip,failed_catch,load_bias,crank_torque_estimate
-0,0,,,,,,,,,
-0.001,1,2,0.5,0,0,0,0,0,0,0.25
-0.002,-1,3,0.5,4,0,0,1,0,0,0.5
-0.003,0,0,0.5,0,1,0,1,0,0,-0.5
+crank_jump,shaft_jump,clutch_slip,failed_catch,load_bias,crank_torque_estimate,\
+crank_friction_estimate
+0,0,,,,,,,,,,
+0.001,1,2,0.5,0,0,0,0,0,0,0.25,0.01
+0.002,-1,3,0.5,4,0,0,1,0,0,0.5,0.02
+0.003,0,0,0.5,0,1,0,1,0,0,-0.5,0.03
 ";
         let t = Table::from_csv(csv).unwrap();
         let panels = observer_figure(&t).expect("the observer's columns");
-        assert_eq!(panels.len(), 4);
+        assert_eq!(panels.len(), 5);
         assert_eq!(panels[0].series[0].y[1..], [2.0, 3.0, 0.0]);
         assert_eq!(panels[0].series[1].y, [0.0, 1.0, -1.0, 0.0]);
         assert_eq!(panels[1].series[0].y[1..], [0.25, 0.5, -0.5]);
-        let raised = &panels[3].series;
+        assert_eq!(panels[2].series[0].y[1..], [0.01, 0.02, 0.03]);
+        let raised = &panels[4].series;
         let names: Vec<&str> = raised.iter().map(|s| s.name.as_str()).collect();
         assert_eq!(names[0], "crank encoder jump");
         assert_eq!(raised[0].y, [0.0, 0.0, 0.0, 1.0]);

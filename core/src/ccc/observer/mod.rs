@@ -21,13 +21,14 @@
 //!
 //! Two tunings. How much the filter corrects is how little it trusts the model (the
 //! process noise is the model's error): [`ObserverSettings::reference`] is for a twin
-//! with a drawing's nominal parameters (masses within ±10 %, friction unknown: large
-//! process noise, the 2-DOF modes only predicted, where a correction of the crank alone
-//! moved the unobserved coordinate the wrong way); [`ObserverSettings::identified`] for
-//! a twin whose parameters were identified from the machine's logs: process noise
-//! small, so the counts' quantization moves the torque estimate little, and the 2-DOF
-//! modes corrected by a fifth of the gain along the crank's dynamically consistent
-//! direction ([`Twin::correct_crank`]).
+//! with a drawing's nominal parameters (masses within ±10 %, friction unknown: the
+//! model's error carried by a fast torque estimate and the friction's, the state's own
+//! noise small); [`ObserverSettings::identified`] for a twin whose parameters were
+//! identified from the machine's logs, friction included: process noise small, so the
+//! counts' quantization moves the torque estimate little, no friction estimated. Both
+//! correct the 2-DOF modes by a fraction of the gain (a tenth, a fifth) along the
+//! crank's dynamically consistent direction ([`Twin::correct_crank`]): by the whole
+//! gain a correction of the crank alone moved the unobserved coordinate the wrong way.
 //!
 //! The force observer. A correction of the state alone leaves the model's dynamics as
 //! they are, so the twin drifts again between updates and its clutch torques (which
