@@ -175,7 +175,7 @@ impl<T: Real> ObserverSettings<T> {
     /// correction only where `|∂θ1/∂q| ≥ 0.4`, and the 2-DOF modes corrected by a
     /// tenth of the gain in a half-count band. Chosen on bench1 (the real machine's
     /// log, issue 19's targets) and the known machine's logs at five operating points
-    /// (README, "The observer": `checks/observer-sweep`), where it keeps 12 of 15
+    /// (README, "The observer": `checks/observer-sweep`), where it keeps 11 of 15
     /// sequences (none at 400/12); each value ×0.7 or ×1.4 is measured there too.
     pub fn reference() -> Self {
         ObserverSettings {

@@ -154,12 +154,20 @@ impl<T: Real> Held<T> {
     }
 }
 
-/// Whether a step's inputs are the last step's, bit for bit (a motor law is taken to be
-/// the same law).
+/// Whether a step's inputs are the last step's, bit for bit: a held torque or a law's
+/// coefficients (a constant's, an asynchronous motor's; an observer moves them from
+/// step to step), and a user's law taken to be the same law. Where they are the same,
+/// the step goes on from the last one's final stage (DP5's first-same-as-last).
 pub(super) fn same_inputs<T: Real>(a: &Held<T>, b: &Inputs<T>) -> bool {
     let motor = match (a.motor, b.motor) {
-        (MotorInput::Torque(x), MotorInput::Torque(y)) => same_bits(x, y),
-        (MotorInput::Law(_), MotorInput::Law(_)) => true,
+        (MotorInput::Torque(x), MotorInput::Torque(y))
+        | (MotorInput::Law(Motor::Constant(x)), MotorInput::Law(Motor::Constant(y))) => {
+            same_bits(x, y)
+        }
+        (MotorInput::Law(Motor::Asynchronous(x)), MotorInput::Law(Motor::Asynchronous(y))) => {
+            same_bits(x.a, y.a) && same_bits(x.b, y.b) && same_bits(x.c, y.c)
+        }
+        (MotorInput::Law(Motor::User(_)), MotorInput::Law(Motor::User(_))) => true,
         _ => false,
     };
     motor && same_bits(a.load, b.load)

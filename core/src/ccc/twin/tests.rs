@@ -1,6 +1,7 @@
 //! The step at rest: skipped ([`Twin::step_at_rest`]) only where the full step (the
 //! oracle: the rest branch's evaluation, done) commits the same bits. The energy
-//! check's rungs: which are tried after a failed attempt.
+//! check's rungs: which are tried after a failed attempt. A motor law whose
+//! coefficients change: new inputs, as a held torque's change is.
 
 use super::{Inputs, MotorInput, Twin, TwinSettings};
 use crate::ccc::{CccParams, Mode};
@@ -146,4 +147,62 @@ fn the_rungs_are_tried_where_the_h6_law_predicts_they_pass() {
     assert!(!rung_may_pass::<f64>(2, 1, None) && !rung_may_pass::<f64>(3, 1, None));
     // In f32 the same law.
     assert!(rung_may_pass(3, 1, Some(121.5f32)) && !rung_may_pass(3, 1, Some(122.0f32)));
+}
+
+/// A motor law whose coefficients change from one step to the next is new inputs, as a
+/// held torque that changes is: the step evaluates its start under the new law rather
+/// than going on from the last step's final stage (DP5's first-same-as-last). The
+/// oracle is the held torque's path: S2 stepped under a constant law whose torque
+/// changes every step (12 N·m ± 0.5, and an asynchronous motor's characteristic with
+/// `b` = 0, its `a` the same torque) commits the bits of S2 stepped under the same
+/// torques held, step after step (an observer moves its estimates so).
+#[test]
+fn a_law_whose_coefficients_change_is_new_inputs() {
+    use crate::motor::Asynchronous;
+    let torque = |k: u32| {
+        if k % 3 == 0 {
+            12.0
+        } else {
+            12.0 + 0.5 * f64::from(k % 2) - 0.25
+        }
+    };
+    let inputs = |motor| Inputs {
+        motor,
+        load: 800.0,
+        measured: None,
+    };
+    let new = || {
+        Box::new(
+            Twin::new(
+                CccParams::reference(),
+                TwinSettings::reference(1e-3),
+                inputs(MotorInput::Torque(12.0)),
+            )
+            .unwrap(),
+        )
+    };
+    let (mut held, mut constant, mut asynchronous) = (new(), new(), new());
+    for k in 0..150 {
+        let v = torque(k);
+        held.step(&inputs(MotorInput::Torque(v))).unwrap();
+        constant
+            .step(&inputs(MotorInput::Law(Motor::Constant(v))))
+            .unwrap();
+        asynchronous
+            .step(&inputs(MotorInput::Law(Motor::Asynchronous(
+                Asynchronous {
+                    a: v,
+                    b: 0.0,
+                    c: 0.0,
+                },
+            ))))
+            .unwrap();
+        let (h, c, a) = (
+            committed(&held),
+            committed(&constant),
+            committed(&asynchronous),
+        );
+        assert_eq!(h, c, "step {k}: the constant law");
+        assert_eq!(h, a, "step {k}: the asynchronous law");
+    }
 }
