@@ -292,27 +292,21 @@ pub struct TwinObserver<T: Real> {
 /// without the friction's estimate); with it they become the asynchronous motor's
 /// characteristic `a + b ω1` (its `b` the friction's), evaluated at every stage.
 fn with_torque<T: Real>(inputs: &Inputs<T>, torque: T, friction: T) -> (Inputs<T>, bool) {
-    let viscous = |a: T| {
+    let biased = |m: Asynchronous<T>| {
         MotorInput::Law(Motor::Asynchronous(Asynchronous {
-            a,
-            b: -friction,
-            c: T::zero(),
+            a: m.a + torque,
+            b: m.b - friction,
+            c: m.c,
         }))
     };
     let (motor, applied) = match inputs.motor {
         MotorInput::Torque(v) | MotorInput::Law(Motor::Constant(v)) if friction != T::zero() => {
-            (viscous(v + torque), true)
+            let (b, c) = (T::zero(), T::zero());
+            (biased(Asynchronous { a: v, b, c }), true)
         }
         MotorInput::Torque(v) => (MotorInput::Torque(v + torque), true),
         MotorInput::Law(Motor::Constant(v)) => (MotorInput::Law(Motor::Constant(v + torque)), true),
-        MotorInput::Law(Motor::Asynchronous(m)) => (
-            MotorInput::Law(Motor::Asynchronous(Asynchronous {
-                a: m.a + torque,
-                b: m.b - friction,
-                c: m.c,
-            })),
-            true,
-        ),
+        MotorInput::Law(Motor::Asynchronous(m)) => (biased(m), true),
         law => (law, false),
     };
     (Inputs { motor, ..*inputs }, applied)
@@ -443,7 +437,7 @@ impl<T: Real> TwinObserver<T> {
         let measured = inputs.measured;
         if let Some(e) = measured.and_then(|m| m.crank) {
             let res = e.resolution();
-            let r = quantization_variance(res, twin.link(1).omega, h);
+            let r = quantization_variance(res, omega, h);
             let nu = e.angle() - twin.link(1).theta;
             let var = prior.innovation_variance(r);
             up.innovation = Some(nu);
@@ -512,13 +506,9 @@ impl<T: Real> TwinObserver<T> {
                 let torque = (self.torque + k[2] * nu_d)
                     .max(-s.torque_limit)
                     .min(s.torque_limit);
-                let friction = if k[3] == T::zero() {
-                    self.friction
-                } else {
-                    (self.friction + k[3] * nu_d)
-                        .max(T::zero())
-                        .min(s.friction_limit)
-                };
+                let friction = (self.friction + k[3] * nu_d)
+                    .max(T::zero())
+                    .min(s.friction_limit);
                 if c.applied
                     && posterior.finite()
                     && torque.finite()
