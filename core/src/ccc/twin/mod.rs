@@ -64,7 +64,7 @@ use evaluate::{Stage, TorqueSource, Torques};
 use guards::Guards;
 use inputs::{check_inputs, same_inputs, Held};
 use nalgebra::SVector;
-use settings::{RETRY_SUBSTEPS, RUNG_SAFETY};
+use settings::{EARLY_AUDIT_MARGIN, RETRY_SUBSTEPS, RUNG_SAFETY};
 use slot::{unwrap_near, Equations, Slot, QD, STATE};
 use slots::Slots;
 
@@ -558,6 +558,12 @@ impl<T: Real> Twin<T> {
         if fired.is_empty() || !may_handle || !self.settings.clutch {
             self.last_guards = fired.is_empty().then_some((g0, h));
             return Ok(false);
+        }
+        if w.audit_at_events {
+            // A finer rung would redo this step: stop before the location if its end
+            // already breaks the energy balance (see `EARLY_AUDIT_MARGIN`).
+            let links = self.slots.cur().links(&self.params);
+            self.balance_within(w, &links, T::c(EARLY_AUDIT_MARGIN))?;
         }
         let (theta, kind, evaluated) = self.locate(w, t0, h, (&g0, &r0), fired, inputs)?;
         self.last_guards = None;
