@@ -1,5 +1,15 @@
-//! The board's memory layout for cortex-m-rt's `link.x`, written into OUT_DIR: the core
-//! and the repository stay board-agnostic (no `memory.x` anywhere in the sources).
+//! Two files written into OUT_DIR:
+//!
+//! - `identified.rs` (every build): bench1's identified converter, read from
+//!   `host-sim/tests/data/known-machine.toml` (the run file `host-sim identify` wrote for
+//!   bench1, which the PC's `replay --params` reads), so that the firmware's
+//!   `bench1-identified` run is that file's converter with no copy of its numbers to
+//!   keep in step. A key of its `[converter]` this script does not know, or a start
+//!   other than SPEC's (the firmware starts the crank at the log's first count and the
+//!   rest as `TwinSettings::reference`), fails the build.
+//! - `memory.x` (target builds): the board's memory layout for cortex-m-rt's `link.x`:
+//!   the core and the repository stay board-agnostic (no `memory.x` anywhere in the
+//!   sources).
 //!
 //! Both MPS2 images QEMU models here map ZBT SSRAM1 (4 MiB, where the image is loaded)
 //! at 0x0000_0000 and ZBT SSRAM2/3 (4 MiB) at 0x2000_0000 (QEMU 7.2 `info mtree` of
@@ -7,10 +17,153 @@
 //! SSRAM2/3 and grows down towards the statics.
 use std::env;
 use std::fs;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
+
+/// bench1's identified run file, from this crate's folder.
+const KNOWN_MACHINE: &str = "../../host-sim/tests/data/known-machine.toml";
 
 fn main() {
     println!("cargo:rerun-if-changed=build.rs");
+    println!("cargo:rerun-if-changed={KNOWN_MACHINE}");
+    let out = PathBuf::from(env::var("OUT_DIR").expect("cargo sets OUT_DIR"));
+    let text = fs::read_to_string(KNOWN_MACHINE).unwrap_or_else(|e| panic!("{KNOWN_MACHINE}: {e}"));
+    let code = identified(&text).unwrap_or_else(|e| panic!("{KNOWN_MACHINE}: {e}"));
+    fs::write(out.join("identified.rs"), code).expect("OUT_DIR is writable");
+    memory_layout(&out);
+}
+
+/// A number of the run file (an integer or a float), as Rust source that keeps its
+/// bits: Rust's `{:?}` of an f64 is the shortest decimal that reads back to it.
+fn number(v: &toml::Value, key: &str) -> Result<String, String> {
+    let x = match v {
+        toml::Value::Float(x) => *x,
+        toml::Value::Integer(i) => *i as f64,
+        _ => return Err(format!("`{key}` is not a number")),
+    };
+    Ok(format!("T::c({x:?})"))
+}
+
+/// A pair `[x, y]` of the run file as a `Vec2`.
+fn pair(v: &toml::Value, key: &str) -> Result<String, String> {
+    match v.as_array().map(|a| a.as_slice()) {
+        Some([x, y]) => Ok(format!(
+            "Vec2::new({}, {})",
+            number(x, key)?,
+            number(y, key)?
+        )),
+        _ => Err(format!("`{key}` is not a pair of numbers")),
+    }
+}
+
+/// A string value among `names`, as the Rust path `prefix` + the matching variant.
+fn variant(v: &toml::Value, key: &str, names: &[(&str, &str)]) -> Result<String, String> {
+    let s = v.as_str().ok_or(format!("`{key}` is not a string"))?;
+    names
+        .iter()
+        .find(|(n, _)| *n == s)
+        .map(|(_, path)| path.to_string())
+        .ok_or(format!("`{key}` = {s:?} is none of {names:?}"))
+}
+
+/// `identified_converter`, the converter of the run file `text`: SPEC's
+/// (`CccParams::reference`) with every value the file's `[converter]` gives.
+fn identified(text: &str) -> Result<String, String> {
+    let doc: toml::Table = text.parse().map_err(|e| format!("{e}"))?;
+    let conv = doc
+        .get("converter")
+        .and_then(|c| c.as_table())
+        .ok_or("no [converter] table")?;
+    let mut set = Vec::new();
+    for (key, v) in conv {
+        let k = key.as_str();
+        match k {
+            "a" | "f" | "h" | "gravity" => set.push(format!("p.{k} = {};", pair(v, k)?)),
+            "rocker_d" | "mass" | "mass_inertia" | "mass_at" | "shaft_inertia" => {
+                set.push(format!("p.{k} = {};", number(v, k)?))
+            }
+            "branch_c" | "branch_g" | "branch_i" => {
+                let side = [("left", "Side::Left"), ("right", "Side::Right")];
+                set.push(format!("p.{k} = {};", variant(v, k, &side)?))
+            }
+            "drive" => {
+                let d = [("cw", "DriveDirection::Cw"), ("ccw", "DriveDirection::Ccw")];
+                set.push(format!("p.drive = {};", variant(v, k, &d)?))
+            }
+            // The firmware's start: the crank at the log's first count, the rest
+            // SPEC's (`TwinSettings::reference`).
+            "crank_deg" | "swing_deg" | "crank_speed" | "swing_speed" => {
+                let spec = match k {
+                    "crank_deg" => 105.0,
+                    "swing_deg" => 90.0,
+                    _ => 0.0,
+                };
+                if v.as_float().or(v.as_integer().map(|i| i as f64)) != Some(spec) {
+                    return Err(format!(
+                        "`{k}` is not SPEC's {spec}: the firmware's bench1 run starts there"
+                    ));
+                }
+            }
+            "link" => {
+                let links = v.as_array().ok_or("`link` is not an array of tables")?;
+                if links.len() != 8 {
+                    return Err(format!("{} links, not 8", links.len()));
+                }
+                for (i, l) in links.iter().enumerate() {
+                    let l = l.as_table().ok_or("a `link` is not a table")?;
+                    for (field, x) in l {
+                        match field.as_str() {
+                            "length" | "mass" | "inertia" => {
+                                set.push(format!("p.links[{i}].{field} = {};", number(x, field)?))
+                            }
+                            other => return Err(format!("link key `{other}` unknown")),
+                        }
+                    }
+                }
+            }
+            "friction" => {
+                let f = v.as_table().ok_or("`friction` is not a table")?;
+                for (field, x) in f {
+                    match field.as_str() {
+                        "viscous" | "coulomb" => {
+                            let joints = x.as_table().ok_or("friction joints not a table")?;
+                            for (joint, c) in joints {
+                                set.push(format!(
+                                    "p.friction.{field}[const {{ friction_joint({joint:?}) }}] = {};",
+                                    number(c, joint)?
+                                ));
+                            }
+                        }
+                        "coulomb_eps" | "clutch_drag" => {
+                            set.push(format!("p.friction.{field} = {};", number(x, field)?))
+                        }
+                        other => return Err(format!("friction key `{other}` unknown")),
+                    }
+                }
+            }
+            other => {
+                return Err(format!(
+                    "[converter] key `{other}` unknown to the firmware's build"
+                ))
+            }
+        }
+    }
+    let mut code = String::from(
+        "/// bench1's identified converter: SPEC's with the values of\n\
+         /// `host-sim/tests/data/known-machine.toml` (written by `build.rs`).\n\
+         pub fn identified_converter<T: Real>() -> CccParams<T> {\n    \
+         let mut p = CccParams::reference();\n",
+    );
+    for line in set {
+        code.push_str("    ");
+        code.push_str(&line);
+        code.push('\n');
+    }
+    code.push_str("    p\n}\n");
+    Ok(code)
+}
+
+/// The board's `memory.x` into `out` (target builds only).
+fn memory_layout(out: &Path) {
     let target = env::var("TARGET").unwrap_or_default();
     if !target.contains("-none") {
         return;
@@ -30,7 +183,6 @@ fn main() {
         }
         _ => panic!("build for {target} with exactly one board feature: mps2-an386 or mps2-an500"),
     };
-    let out = PathBuf::from(env::var("OUT_DIR").expect("cargo sets OUT_DIR"));
     fs::write(out.join("memory.x"), memory).expect("OUT_DIR is writable");
     println!("cargo:rustc-link-search={}", out.display());
     println!("cargo:rustc-link-arg-bins=-Tlink.x");

@@ -18,7 +18,11 @@
 //!   (issue 19: an observer step at most 2× a plain one).
 
 use super::*;
-use structomat::ccc::{Encoder, Measurement, ObserverSettings, TwinObserver};
+use structomat::ccc::{
+    DriveDirection, Encoder, Measurement, ObserverSettings, Side, TwinObserver,
+    FRICTION_JOINT_NAMES,
+};
+use structomat::scalar::Vec2;
 
 /// bench1's log: `t,motor_torque,load_torque,crank_counts,shaft_counts` at 1 kHz.
 const BENCH1: &str = include_str!("../../../host-sim/tests/data/bench1.csv");
@@ -49,20 +53,31 @@ impl Tuning {
     }
 }
 
-/// bench1's identified machine: SPEC's converter with the values of
-/// `host-sim/tests/data/known-machine.toml` (`host-sim identify` of bench1: the
-/// oscillating mass, the coupler's and the rocker's masses, viscous friction at A, B
-/// and E), so that this run is the PC's `replay --params known-machine.toml`.
-pub fn identified_converter<T: Real>() -> CccParams<T> {
-    let mut p = CccParams::reference();
-    p.mass = T::c(6.480953748182883);
-    p.links[1].mass = T::c(2.8585363092165066);
-    p.links[2].mass = T::c(5.362709443504636);
-    // FRICTION_JOINTS' A, B and E.
-    p.friction.viscous[0] = T::c(0.049121364498234496);
-    p.friction.viscous[1] = T::c(0.0138649815303933);
-    p.friction.viscous[3] = T::c(0.014060564719278522);
-    p
+// bench1's identified machine (`identified_converter`): SPEC's converter with the
+// values of `host-sim/tests/data/known-machine.toml` (`host-sim identify` of bench1),
+// written by `build.rs` from that file, so that this run is the PC's `replay --params
+// known-machine.toml`.
+include!(concat!(env!("OUT_DIR"), "/identified.rs"));
+
+/// The index of the friction joint `name` in [`FRICTION_JOINT_NAMES`] (SPEC's letters,
+/// as the run files name them); a name that is none of them fails the build (the
+/// generated code calls it in a `const` block).
+const fn friction_joint(name: &str) -> usize {
+    let mut k = 0;
+    while k < FRICTION_JOINT_NAMES.len() {
+        let (a, b) = (FRICTION_JOINT_NAMES[k].as_bytes(), name.as_bytes());
+        if a.len() == b.len() {
+            let mut i = 0;
+            while i < a.len() && a[i] == b[i] {
+                i += 1;
+            }
+            if i == a.len() {
+                return k;
+            }
+        }
+        k += 1;
+    }
+    panic!("a friction joint of known-machine.toml is none of FRICTION_JOINT_NAMES")
 }
 
 /// One row of the log; the torques as decimals ([`decimal`]).
