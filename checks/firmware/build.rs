@@ -4,9 +4,9 @@
 //!   `host-sim/tests/data/known-machine.toml` (the run file `host-sim identify` wrote for
 //!   bench1, which the PC's `replay --params` reads), so that the firmware's
 //!   `bench1-identified` run is that file's converter with no copy of its numbers to
-//!   keep in step. A key of its `[converter]` this script does not know, or a start
-//!   other than SPEC's (the firmware starts the crank at the log's first count and the
-//!   rest as `TwinSettings::reference`), fails the build.
+//!   keep in step (`identified_converter`, and `identified_start` the file's initial
+//!   angles and speeds). A key of its `[converter]` this script does not know fails
+//!   the build.
 //! - `memory.x` (target builds): the board's memory layout for cortex-m-rt's `link.x`:
 //!   the core and the repository stay board-agnostic (no `memory.x` anywhere in the
 //!   sources).
@@ -32,15 +32,19 @@ fn main() {
     memory_layout(&out);
 }
 
-/// A number of the run file (an integer or a float), as Rust source that keeps its
-/// bits: Rust's `{:?}` of an f64 is the shortest decimal that reads back to it.
+/// A number of the run file (an integer or a float).
+fn float(v: &toml::Value, key: &str) -> Result<f64, String> {
+    match v {
+        toml::Value::Float(x) => Ok(*x),
+        toml::Value::Integer(i) => Ok(*i as f64),
+        _ => Err(format!("`{key}` is not a number")),
+    }
+}
+
+/// A number of the run file as Rust source that keeps its bits: Rust's `{:?}` of an
+/// f64 is the shortest decimal that reads back to it.
 fn number(v: &toml::Value, key: &str) -> Result<String, String> {
-    let x = match v {
-        toml::Value::Float(x) => *x,
-        toml::Value::Integer(i) => *i as f64,
-        _ => return Err(format!("`{key}` is not a number")),
-    };
-    Ok(format!("T::c({x:?})"))
+    Ok(format!("T::c({:?})", float(v, key)?))
 }
 
 /// A pair `[x, y]` of the run file as a `Vec2`.
@@ -73,7 +77,7 @@ fn identified(text: &str) -> Result<String, String> {
         .get("converter")
         .and_then(|c| c.as_table())
         .ok_or("no [converter] table")?;
-    let mut set = Vec::new();
+    let (mut set, mut start) = (Vec::new(), Vec::new());
     for (key, v) in conv {
         let k = key.as_str();
         match k {
@@ -89,20 +93,13 @@ fn identified(text: &str) -> Result<String, String> {
                 let d = [("cw", "DriveDirection::Cw"), ("ccw", "DriveDirection::Ccw")];
                 set.push(format!("p.drive = {};", variant(v, k, &d)?))
             }
-            // The firmware's start: the crank at the log's first count, the rest
-            // SPEC's (`TwinSettings::reference`).
-            "crank_deg" | "swing_deg" | "crank_speed" | "swing_speed" => {
-                let spec = match k {
-                    "crank_deg" => 105.0,
-                    "swing_deg" => 90.0,
-                    _ => 0.0,
-                };
-                if v.as_float().or(v.as_integer().map(|i| i as f64)) != Some(spec) {
-                    return Err(format!(
-                        "`{k}` is not SPEC's {spec}: the firmware's bench1 run starts there"
-                    ));
-                }
+            // The start, converted as host-sim's run files are (degrees to radians
+            // in f64, then to `T`).
+            "crank_deg" | "swing_deg" => {
+                let (angle, deg) = (&k[..5], float(v, k)?);
+                start.push(format!("s.{angle} = T::c({deg:?}_f64.to_radians());"))
             }
+            "crank_speed" | "swing_speed" => start.push(format!("s.{k} = {};", number(v, k)?)),
             "link" => {
                 let links = v.as_array().ok_or("`link` is not an array of tables")?;
                 if links.len() != 8 {
@@ -158,7 +155,18 @@ fn identified(text: &str) -> Result<String, String> {
         code.push_str(&line);
         code.push('\n');
     }
-    code.push_str("    p\n}\n");
+    code.push_str("    p\n}\n\n");
+    code.push_str(
+        "/// The start of `known-machine.toml`'s run: `s` with its initial angles and\n\
+         /// speeds (written by `build.rs`).\n\
+         pub fn identified_start<T: Real>(s: &mut TwinSettings<T>) {\n",
+    );
+    for line in start {
+        code.push_str("    ");
+        code.push_str(&line);
+        code.push('\n');
+    }
+    code.push_str("}\n");
     Ok(code)
 }
 

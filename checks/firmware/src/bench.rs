@@ -166,8 +166,12 @@ pub fn run_bench1<T: Real, C: Counter, W: Write>(
         return Err(Failed);
     };
     // The filter starts from the first measurement: the crank at the middle of the
-    // log's first count (as the PC's replay starts it); the rest is SPEC's start.
+    // log's first count (as the PC's replay starts it); the rest is the run file's
+    // start (SPEC's, `TwinSettings::reference`, for the nominal run).
     let mut settings = TwinSettings::reference(T::c(PERIOD));
+    if tuning == Tuning::Identified {
+        identified_start(&mut settings);
+    }
     settings.crank = (T::c(first.crank as f64) + T::c(0.5)) * encoder::<T>(0).resolution();
     let start = Inputs {
         motor: MotorInput::Torque(value(first.motor)),

@@ -301,8 +301,12 @@ fn with_torque<T: Real>(inputs: &Inputs<T>, torque: T, friction: T) -> (Inputs<T
     };
     let (motor, applied) = match inputs.motor {
         MotorInput::Torque(v) | MotorInput::Law(Motor::Constant(v)) if friction != T::zero() => {
-            let (b, c) = (T::zero(), T::zero());
-            (biased(Asynchronous { a: v, b, c }), true)
+            let held = Asynchronous {
+                a: v,
+                b: T::zero(),
+                c: T::zero(),
+            };
+            (biased(held), true)
         }
         MotorInput::Torque(v) => (MotorInput::Torque(v + torque), true),
         MotorInput::Law(Motor::Constant(v)) => (MotorInput::Law(Motor::Constant(v + torque)), true),
