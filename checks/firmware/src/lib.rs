@@ -413,6 +413,13 @@ pub fn run_s2<T: Real, C: Counter, W: Write>(
     refuse_nan_load(twin, &inputs, out, name)?;
     if counter.counts() {
         let stack_step = counter.stack();
+        // The dear steps, for whoever works on the budget: every step within half of
+        // the worst, in step order.
+        for (k, &c) in counts[..steps].iter().enumerate() {
+            if c >= worst / 2 {
+                record!(out, "{name} dear step {k} count {c}");
+            }
+        }
         let s = Stats::of(&mut counts[..steps]);
         record!(out, "{name} stack new {stack_new} step {stack_step}");
         record!(

@@ -302,7 +302,9 @@ impl<T: Real> Twin<T> {
                 "t = {:.6} s: the step redone in {substeps} sub-steps (energy jump {excess:?} of its tolerance)",
                 self.t.to_f64()
             );
-            result = self.attempt(inputs, changed, true, substeps, &saved, &mut excess);
+            // The failed attempt's restore seeded the first stage (see `attempt`): a
+            // retry takes 1 evaluation fewer (8k Thumb-2 instructions on the M7 in A68).
+            result = self.attempt(inputs, changed, changed, substeps, &saved, &mut excess);
             done = substeps;
         }
         let Err(failure) = result else {
@@ -367,7 +369,9 @@ impl<T: Real> Twin<T> {
     /// committed if it succeeds; on an error the twin is back at its last good state
     /// (the current slot's warm starts `saved`). `changed`: the inputs differ from the
     /// last step's; `fresh`: the integrator's last stage is not the first of this
-    /// attempt (the inputs changed, or an attempt failed).
+    /// attempt (the inputs changed). A failed attempt's restore evaluates the step's
+    /// start anew and seeds DP5 with it under the last step's inputs
+    /// ([`Twin::restore`]): with the same inputs, the retry's first stage.
     fn attempt(
         &mut self,
         inputs: &Inputs<T>,

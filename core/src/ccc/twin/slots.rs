@@ -153,7 +153,8 @@ impl<T: Real> Twin<T> {
 
     /// Back to the state before the step: the pre-step slot (kept by
     /// [`Twin::take_candidate`] if the step changed it) with its groups' warm starts
-    /// `saved`.
+    /// `saved`, evaluated there under the last step's inputs, DP5 seeded with that
+    /// evaluation (a retry under the same inputs takes it as its first stage).
     pub(super) fn restore(&mut self, switched: bool, saved: &WarmStart<T>) {
         if switched {
             self.slots.role.swap(0, 1);
