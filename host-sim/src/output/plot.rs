@@ -346,9 +346,10 @@ const DIAGNOSTICS: [(&str, &str); 5] = [
 
 /// An observed replay's panels (`None` without its columns): the crank's innovation
 /// (measured - predicted) beside its residual after the update (measured - corrected
-/// twin), the unknown torque on the crank and its bearing's friction it estimates, the
-/// shaft's innovation since the last mode change, and each diagnostic's count of steps
-/// raised so far (a step line that rises where the diagnostic fires).
+/// twin), the unknown torque on the crank, its bearing's friction and the oscillating
+/// mass it estimates, the shaft's innovation since the last mode change, and each
+/// diagnostic's count of steps raised so far (a step line that rises where the
+/// diagnostic fires).
 fn observer_figure(table: &Table) -> Option<Vec<Plot>> {
     let t = table.column("t")?;
     table.column("crank_innovation")?;
@@ -403,6 +404,18 @@ fn observer_figure(table: &Table) -> Option<Vec<Plot>> {
                 "Viscous friction of the crank's bearing the filter estimates (its torque -c ω1 added to the motor's)",
                 "N·m·s/rad",
                 &[("crank_friction_estimate", "estimate")],
+            ),
+        );
+    }
+    if table.column("oscillating_mass").is_some() {
+        let at = panels.len() - 2;
+        panels.insert(
+            at,
+            plot(
+                table,
+                "Oscillating mass the twin carries (the filter's estimate)",
+                "kg",
+                &[("oscillating_mass", "mass")],
             ),
         );
     }

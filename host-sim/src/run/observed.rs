@@ -14,14 +14,16 @@ use structomat::Real;
 /// (measured - predicted, counts) and its standard deviation after the update (counts),
 /// the shaft's innovation since the last mode change (counts), the crank's unknown
 /// torque estimated (N·m, CCW, added to the motor's), the crank bearing's unknown
-/// viscous friction estimated (N·m·s/rad, its torque `-c ω1` added to the motor's), and
-/// each diagnostic (1 when raised at the step).
-pub const OBSERVER_COLUMNS: [&str; 10] = [
+/// viscous friction estimated (N·m·s/rad, its torque `-c ω1` added to the motor's), the
+/// oscillating mass the twin carries (kg: the estimate, with a tuning that estimates
+/// it), and each diagnostic (1 when raised at the step).
+pub const OBSERVER_COLUMNS: [&str; 11] = [
     "crank_innovation",
     "crank_sigma",
     "shaft_innovation",
     "crank_torque_estimate",
     "crank_friction_estimate",
+    "oscillating_mass",
     "crank_jump",
     "shaft_jump",
     "clutch_slip",
@@ -107,9 +109,9 @@ pub struct ObservedSummary {
     pub steps: [u64; 5],
     /// The energy the corrections put in, J (the audit's own term).
     pub correction_energy: f64,
-    /// The crank's unknown torque (N·m) and its bearing's unknown viscous friction
-    /// (N·m·s/rad) estimated at the last step.
-    pub estimates: (f64, f64),
+    /// The crank's unknown torque (N·m), its bearing's unknown viscous friction
+    /// (N·m·s/rad) and the oscillating mass (kg) estimated at the last step.
+    pub estimates: (f64, f64, f64),
     last: [bool; 5],
 }
 
@@ -142,7 +144,7 @@ impl ObservedSummary {
             self.residual_settled.add(residual, time);
         }
         self.correction_energy = twin.audit().correction.to_f64();
-        self.estimates = (up.torque.to_f64(), up.friction.to_f64());
+        self.estimates = (up.torque.to_f64(), up.friction.to_f64(), up.mass.to_f64());
         let num = |x: Option<f64>| x.map_or(Cell::Empty, |x| Cell::Num(T::c(x)));
         cells.extend([
             num(nu),
@@ -150,6 +152,7 @@ impl ObservedSummary {
             num(up.shaft_innovation.map(|x| x.to_f64())),
             num(Some(up.torque.to_f64())),
             num(Some(up.friction.to_f64())),
+            num(Some(up.mass.to_f64())),
         ]);
         for (k, d) in Diagnostic::ALL.into_iter().enumerate() {
             let on = up.diagnostics.contains(d);
@@ -192,9 +195,10 @@ impl fmt::Display for ObservedSummary {
         )?;
         writeln!(
             f,
-            "          estimated at the end: the crank's unknown torque {} N·m, its bearing's viscous friction {} N·m·s/rad",
+            "          estimated at the end: the crank's unknown torque {} N·m, its bearing's viscous friction {} N·m·s/rad, the oscillating mass {} kg",
             Fig(self.estimates.0),
-            Fig(self.estimates.1)
+            Fig(self.estimates.1),
+            Fig(self.estimates.2)
         )?;
         if self.onsets.is_empty() {
             return write!(f, "          diagnostics: none");

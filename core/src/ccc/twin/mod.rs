@@ -33,6 +33,7 @@ mod guards;
 mod impact;
 mod inputs;
 mod locate;
+mod mass;
 mod outputs;
 mod settings;
 mod slot;
