@@ -271,28 +271,25 @@ impl<T: Real, C: Capacity<T>> Model<T, C> {
     }
     /// Sets body `body`'s (1-based) mass (kg), moment of inertia about its COG (kg·m²)
     /// and COG (in its frame, m): a parameter changed between steps, e.g. by an
-    /// estimator (the next evaluation takes it). Returns whether it was set: no such
-    /// body, or a value the model's validation refuses (not finite, a negative mass or
-    /// inertia), leaves the model as it is.
-    pub fn set_mass_properties(&mut self, body: u8, mass: T, inertia: T, cog: Vec2<T>) -> bool {
-        let ok = mass.finite()
-            && inertia.finite()
-            && cog.x.finite()
-            && cog.y.finite()
-            && mass >= T::zero()
-            && inertia >= T::zero();
-        let link = (body as usize)
+    /// estimator (the next evaluation takes it). A value the model's validation refuses
+    /// (not finite, a negative mass or inertia) or no such body is its error, and the
+    /// model stays as it is.
+    pub fn set_mass_properties(
+        &mut self,
+        body: u8,
+        mass: T,
+        inertia: T,
+        cog: Vec2<T>,
+    ) -> Result<(), ModelError> {
+        validate::mass_properties(mass, inertia, &cog)?;
+        let l = (body as usize)
             .checked_sub(1)
-            .and_then(|k| self.links.get_mut(k));
-        match link {
-            Some(l) if ok => {
-                l.mass = mass;
-                l.inertia = inertia;
-                l.cog = cog;
-                true
-            }
-            _ => false,
-        }
+            .and_then(|k| self.links.get_mut(k))
+            .ok_or(ModelError::UnknownReference("link"))?;
+        l.mass = mass;
+        l.inertia = inertia;
+        l.cog = cog;
+        Ok(())
     }
     /// The ground points (world, m).
     pub fn ground_points(&self) -> &[Vec2<T>] {

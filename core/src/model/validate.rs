@@ -71,15 +71,7 @@ fn validate_bodies<T: Real, C: Capacity<T>>(m: &mut Model<T, C>) -> Result<T, Mo
         scale = scale.max(p.x.abs()).max(p.y.abs());
     }
     for l in m.links.iter() {
-        finite(l.mass, "link mass")?;
-        finite(l.inertia, "link inertia")?;
-        finite2(&l.cog, "link COG")?;
-        if l.mass < T::zero() {
-            return Err(ModelError::Negative("link mass"));
-        }
-        if l.inertia < T::zero() {
-            return Err(ModelError::Negative("link inertia"));
-        }
+        mass_properties(l.mass, l.inertia, &l.cog)?;
         for p in l.points.iter() {
             finite2(p, "link point")?;
             scale = scale.max(p.x.abs()).max(p.y.abs());
@@ -224,6 +216,25 @@ fn group_values_finite<T: Real>(g: &Group<T>) -> Result<(), &'static str> {
         if let JointKind::Prismatic { dir } | JointKind::DriveForce { dir } = j.kind {
             ok2(&dir, "a guide direction")?;
         }
+    }
+    Ok(())
+}
+
+/// A link's mass (kg), moment of inertia (kg·m²) and COG (m): finite, the first two not
+/// negative.
+pub(super) fn mass_properties<T: Real>(
+    mass: T,
+    inertia: T,
+    cog: &Vec2<T>,
+) -> Result<(), ModelError> {
+    finite(mass, "link mass")?;
+    finite(inertia, "link inertia")?;
+    finite2(cog, "link COG")?;
+    if mass < T::zero() {
+        return Err(ModelError::Negative("link mass"));
+    }
+    if inertia < T::zero() {
+        return Err(ModelError::Negative("link inertia"));
     }
     Ok(())
 }

@@ -395,29 +395,25 @@ fn observer_figure(table: &Table) -> Option<Vec<Plot>> {
             ),
         );
     }
-    if table.column("crank_friction_estimate").is_some() {
-        let at = panels.len() - 2;
-        panels.insert(
-            at,
-            plot(
-                table,
-                "Viscous friction of the crank's bearing the filter estimates (its torque -c ω1 added to the motor's)",
-                "N·m·s/rad",
-                &[("crank_friction_estimate", "estimate")],
-            ),
-        );
-    }
-    if table.column("oscillating_mass").is_some() {
-        let at = panels.len() - 2;
-        panels.insert(
-            at,
-            plot(
-                table,
-                "Oscillating mass the twin carries (the filter's estimate)",
-                "kg",
-                &[("oscillating_mass", "mass")],
-            ),
-        );
+    // The friction's and the mass's estimates, each before the shaft's panel.
+    for (col, label, title, unit) in [
+        (
+            "crank_friction_estimate",
+            "estimate",
+            "Viscous friction of the crank's bearing the filter estimates (its torque -c ω1 added to the motor's)",
+            "N·m·s/rad",
+        ),
+        (
+            "oscillating_mass",
+            "mass",
+            "Oscillating mass the twin carries (the filter's estimate)",
+            "kg",
+        ),
+    ] {
+        if table.column(col).is_some() {
+            let at = panels.len() - 2;
+            panels.insert(at, plot(table, title, unit, &[(col, label)]));
+        }
     }
     Some(panels)
 }

@@ -258,7 +258,7 @@ mod tests {
         let mut m = twin.slots.cur().model.clone();
         let body = twin.slots.cur().body(super::ROCKER);
         let cog = Vec2::new(0.3, 0.0);
-        assert!(m.set_mass_properties(body, 7.0, 0.5, cog));
+        assert_eq!(m.set_mass_properties(body, 7.0, 0.5, cog), Ok(()));
         let l = &m.links()[usize::from(body) - 1];
         assert_eq!((l.mass, l.inertia, l.cog), (7.0, 0.5, cog));
         for (b, mass, inertia, c) in [
@@ -269,7 +269,7 @@ mod tests {
             (body, f64::NAN, 1.0, cog),
             (body, 1.0, 1.0, Vec2::new(f64::INFINITY, 0.0)),
         ] {
-            assert!(!m.set_mass_properties(b, mass, inertia, c));
+            assert!(m.set_mass_properties(b, mass, inertia, c).is_err());
         }
         let l = &m.links()[usize::from(body) - 1];
         assert_eq!((l.mass, l.inertia, l.cog), (7.0, 0.5, cog));
