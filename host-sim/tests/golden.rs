@@ -96,19 +96,19 @@ const PINS: &[Pin<'static>] = &[
     Pin {
         args: "ccc-s2",
         exit: 0,
-        csv: "b61482e1b36786af89f225faf3b5ef24bc7618de4e72911dfcea07fa5fac4e1c",
+        csv: "d285fa22101ea0fd9015ae84598574da8eb9667f98bea42667587dee6ee71097",
         logs: Some((
-            "105c7200613ececd96f718a1faadbc99e49eb27a5f0b880c0642393281df3d96",
-            "8a6dc425ca8077eec2849c1b9bfc1411ff579062ea580786bbaa8d47321d8326",
+            "3354651171d184d2cd5c6dc606af782396d767a464f782db99638e21c2c632bd",
+            "362fb3dec856e533a01179d1d99f4fbc79947a49c588136fd8cdba5f1a82e4b7",
         )),
     },
     Pin {
         args: "ccc-s2 --ccw",
         exit: 0,
-        csv: "29917526f3e85270dc29a21742ee67af696bf37ec7465bf6d898c0ffd4de86db",
+        csv: "79f70c1614b20af5e6757a33089489f0e7a554d91e66c3332c8b10b485c60f3d",
         logs: Some((
-            "df4f92d991147c5ad472576bccad21ff380439e6ab35fc717130a86bd47e5f32",
-            "f62a398f2f898fb8152c2632e6d7fafba5da7c2ffd2da93706153640823eac5b",
+            "40866bc4acdc27412e75fc8d14cbc4d72f9fd08b55eba4e91064baccaeeb8250",
+            "0400ffeaa82e5ecd00178481188f76ffb57d000da7989d41b7a3c8b7d1fa02af",
         )),
     },
     Pin {
@@ -129,10 +129,10 @@ const PINS: &[Pin<'static>] = &[
     Pin {
         args: "ccc-s2 --f32",
         exit: 0,
-        csv: "660cce81800a4c5cc43440297a555b10facb823c0c2d048e855cdc3cc8afdf03",
+        csv: "ca2bdb79ef88ade478b94a0d3e08c62ea6b04fbcd6a220c41ad5c8d87f859db4",
         logs: Some((
-            "b30b72e69e6267ee27bb40dbf5e1f1ff6d3979378b04facff1f95f37fe109f8e",
-            "182838542b115ce271cc9c5cc0e3baac26be639c8ef19fead393dca675127f60",
+            "bc74ea616d87e815889ff06a261472c8c3afab4ab37a3ffb86901101a3d74da4",
+            "376b218d2ce54134bc3f519101649e6392f96ab1de9ea2a5dce7c247ab35bd3f",
         )),
     },
 ];

@@ -1,5 +1,6 @@
 //! Coordinate choice and switching at dead points of the coordinates.
 
+use super::super::build::dyads_conditioning;
 use super::super::mode::{Coordinates, Mode};
 use super::super::params::CccParams;
 use super::error::{Failure, TwinStepError};
@@ -156,7 +157,6 @@ impl<T: Real> Twin<T> {
         inputs: &Inputs<T>,
         failed: Option<StepError>,
     ) -> Result<(), TwinStepError> {
-        let links = self.slots.cur().links(&self.params);
         let now = self.slots.cur().conditioning();
         let Some((cond, coords, q)) = self.best_other_choice(w, failed)? else {
             // No other choice assembles here: the current one still drives.
@@ -165,10 +165,76 @@ impl<T: Real> Twin<T> {
         if !(failed.is_some() || cond > now * T::c(1.5)) {
             return Ok(());
         }
+        self.take_coordinates(w, inputs, (now, cond), coords, &q)
+    }
+
+    /// Back to the mode's preferred coordinates (its first choice, whose groups are
+    /// in closed form where another choice needs Newton: A68's lever, I6's and I8's
+    /// swing) once they are conditioned at least `switch_below` at `w`'s state: a
+    /// dead point made the twin leave them, and the choice it took would otherwise
+    /// stand until its own. S2's A68 step costs 71k x86_64 instructions with the
+    /// crank as its coordinate (a six-link group by Newton), 39k with the lever
+    /// (dyads). No ping-pong: the twin leaves a choice only under `switch_below` and
+    /// for another 1.5 times better conditioned ([`Twin::switch_coordinates`]), and
+    /// conditioning moves smoothly with the state. Checked at the end of each step off
+    /// the preferred choice (not at a mode choice): its conditioning predicted from
+    /// the pose ([`dyads_conditioning`], a few sines), and only where that reaches
+    /// `switch_below` assembled in the scratch slot and taken if it is conditioned
+    /// so (before [`Twin::switch_coordinates`] looks for a better conditioned one); one
+    /// that does not assemble leaves the twin as it is. Returns whether it switched.
+    pub(super) fn return_to_preferred(
+        &mut self,
+        w: &mut Work<T>,
+        inputs: &Inputs<T>,
+    ) -> Result<bool, TwinStepError> {
+        let (mode, now) = (self.slots.cur().mode, self.slots.cur().coords);
+        let Some(&preferred) = mode.coordinate_choices().first() else {
+            return Ok(false);
+        };
+        if preferred == now {
+            return Ok(false);
+        }
+        let pose = self.slot_links_unwrapped();
+        // The preferred choices are dyads: their conditioning at the pose needs no
+        // build, and the build is made only where it predicts a return.
+        // (The margin keeps the prediction's rounding from deciding.)
+        let least = self.settings.switch_below;
+        if dyads_conditioning(mode, preferred, &pose).is_none_or(|c| c < least * T::c(1.0 - 1e-9)) {
+            return Ok(false);
+        }
+        let time = w.t.to_f64();
+        let (scratch, params) = self.scratch(w.switched);
+        let q = match scratch.reposition(params, mode, preferred, &pose, time) {
+            Ok(q) => q,
+            Err(TwinStepError::Step(StepError::Group { .. })) => return Ok(false),
+            Err(e) => return Err(e),
+        };
+        let cond = scratch.conditioning();
+        if !(cond >= least) {
+            return Ok(false);
+        }
+        let before = self.slots.cur().conditioning();
+        self.take_coordinates(w, inputs, (before, cond), preferred, &q)?;
+        Ok(true)
+    }
+
+    /// Makes the scratch slot, assembled in `coords` at `w`'s pose with coordinates
+    /// `q`, the current one: the state mapped exactly (the links' speeds carried
+    /// over), DP5 restarted there, the switch logged with the choices' conditioning
+    /// `(before, after)`.
+    fn take_coordinates(
+        &mut self,
+        w: &mut Work<T>,
+        inputs: &Inputs<T>,
+        (now, cond): (T, T),
+        coords: Coordinates,
+        q: &[T; 2],
+    ) -> Result<(), TwinStepError> {
+        let links = self.slots.cur().links(&self.params);
         let from = self.slots.cur().coords;
         self.take_candidate(w);
         let omega: [T; 9] = core::array::from_fn(|p| links[p].omega);
-        load_state(self.slots.cur(), &q, &omega, &mut w.y);
+        load_state(self.slots.cur(), q, &omega, &mut w.y);
         self.dp5.invalidate();
         self.restart_at(w, inputs)?;
         let after = self.slots.cur().links(&self.params);
@@ -293,6 +359,63 @@ mod tests {
         let (mut slot, mut spare) = (Slot::empty(), Slot::empty());
         best_slot(p, mode, pose, 0.0, switch_below, &mut slot, &mut spare).unwrap();
         slot.coords
+    }
+
+    /// S2 at h = 1 ms, CW and CCW: at the end of every step without a mode change the
+    /// twin is in its mode's preferred coordinates (the first choice) wherever these
+    /// assemble at its pose conditioned at least `switch_below` (the oracle: that
+    /// choice built alone at the pose); the twin leaves them and returns to them
+    /// (switches both ways), so both sides of the rule are seen.
+    #[test]
+    fn the_twin_returns_to_its_preferred_coordinates_once_they_are_conditioned() {
+        use super::super::super::params::DriveDirection as Drive;
+        use super::super::{Inputs, MotorInput, Twin, TwinSettings};
+        use crate::motor::Motor;
+        extern crate std;
+        use std::boxed::Box;
+        let inputs = Inputs {
+            motor: MotorInput::Law(Motor::Constant(12.0)),
+            load: 800.0,
+            measured: None,
+        };
+        for drive in [Drive::Cw, Drive::Ccw] {
+            let mut p = CccParams::<f64>::reference();
+            p.drive = drive;
+            let settings = TwinSettings::reference(1e-3);
+            let mut twin = Box::new(Twin::new(p, settings, inputs).unwrap());
+            let mut oracle = Box::new(Slot::empty());
+            let (mut off, mut left, mut returned) = (0, 0, 0);
+            for _ in 0..800 {
+                twin.step(&inputs).unwrap();
+                for s in twin.switches() {
+                    let preferred = s.mode.coordinate_choices()[0];
+                    left += usize::from(s.from == preferred);
+                    returned += usize::from(s.to == preferred);
+                }
+                let (mode, coords) = (twin.mode(), twin.slots.cur().coords);
+                let preferred = mode.coordinate_choices()[0];
+                if !twin.events().is_empty() || coords == preferred {
+                    continue;
+                }
+                off += 1;
+                let pose = twin.slot_links_unwrapped();
+                if oracle
+                    .rebuild(&p, mode, preferred, &pose, twin.time())
+                    .is_ok()
+                {
+                    let cond = oracle.conditioning();
+                    assert!(
+                        cond < settings.switch_below * (1.0 + 1e-9),
+                        "{drive:?} t = {}: {mode} in {coords}, {preferred} conditioned {cond}",
+                        twin.time()
+                    );
+                }
+            }
+            assert!(
+                off > 10 && left > 0 && returned > 0,
+                "{drive:?}: {off} {left} {returned}"
+            );
+        }
     }
 
     /// Regression (best_slot ignored `switch_below`, taking the first choice conditioned

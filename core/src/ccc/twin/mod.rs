@@ -588,8 +588,9 @@ impl<T: Real> Twin<T> {
         Ok(true)
     }
 
-    /// The step's end at `t_end`: a coordinate switch if the current choice nears its
-    /// dead point, the time exactly `t_end`, the clutch torques of the kinetostatics.
+    /// The step's end at `t_end`: back to the mode's preferred coordinates if they are
+    /// conditioned again, else a coordinate switch if the current choice nears its
+    /// dead point; the time exactly `t_end`, the clutch torques of the kinetostatics.
     fn step_end_at(
         &mut self,
         w: &mut Work<T>,
@@ -604,6 +605,7 @@ impl<T: Real> Twin<T> {
         // each time. The next step's end scans as usual.
         if self.slots.cur().mode != Mode::Jam
             && !w.chosen
+            && !self.return_to_preferred(w, inputs)?
             && self.slots.cur().conditioning() < self.settings.switch_below
         {
             self.switch_coordinates(w, inputs, None)?;
