@@ -272,6 +272,62 @@ fn injected_faults_are_named_at_their_instants() {
     assert!((slip_at..slip_at + 10).contains(&k), "named at step {k}");
 }
 
+/// A reading that drifts from the twin a few counts a step is no encoder jump, one
+/// that steps is: with the gate at 0 standard deviations (an innovation past 16 counts
+/// is past it), the crank's counts shifted by 3 more each step for 12 steps from
+/// 0.035 s, in I0 (a 2-DOF mode, corrected by a tenth of the gain, so the innovation
+/// grows past 16 counts: what the former rule named a jump), name no jump, and the
+/// twin, its covariance reset past the gate, follows the shifted counts back to within
+/// 3 counts; the same shift of 36 counts made at one sample is named a jump there.
+#[test]
+fn a_drift_is_no_encoder_jump_and_a_step_is() {
+    let mut settings = ObserverSettings::reference();
+    settings.jump_gate = 0.0;
+    for stepped in [false, true] {
+        let mut machine = Machine::new();
+        let mut t = twin::<f64>(105.0);
+        let mut obs = TwinObserver::new(settings);
+        let (from, steps) = (35, 12);
+        let (mut largest, mut named, mut last) = (0.0f64, None, 0.0);
+        for k in 0..80 {
+            let mut c = machine.period();
+            let shift = if stepped {
+                if k >= from {
+                    3 * steps
+                } else {
+                    0
+                }
+            } else {
+                3 * (k.clamp(from - 1, from + steps - 1) - (from - 1))
+            };
+            c.0 += shift;
+            let up = obs.step(&mut t, &s2_inputs(Some(reading(c)))).unwrap();
+            if (from..from + steps).contains(&k) && !stepped {
+                assert_eq!(t.mode(), Mode::I0, "step {k}: the drift is in I0");
+            }
+            let res = TAU / 4096.0;
+            largest = largest.max(up.innovation.unwrap().abs() / res);
+            if up.diagnostics.contains(Diagnostic::EncoderJump("crank")) {
+                named.get_or_insert(k);
+            }
+            last = (c.0 - counts(t.link(1).theta)) as f64;
+        }
+        if stepped {
+            assert_eq!(named, Some(from), "the step named where it is made");
+        } else {
+            assert!(
+                largest > 16.0,
+                "the innovation grew to {largest} counts only"
+            );
+            assert_eq!(named, None, "a drift named a jump");
+            assert!(
+                last.abs() < 3.0,
+                "the twin {last} counts off the shifted counts"
+            );
+        }
+    }
+}
+
 /// The force observer on a machine with a known torque the model lacks: S2's twin
 /// stepped open-loop with 0.5 N·m more on its crank than the observed twin is told
 /// (the motor's constant 12.5 N·m against 12, and the same with an asynchronous
