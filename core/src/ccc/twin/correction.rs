@@ -123,15 +123,12 @@ impl<T: Real> Twin<T> {
         if dof != 2 {
             return least;
         }
-        let m = |i: usize, j: usize| slot.ws.mass_q.get((i, j)).copied().unwrap_or(T::zero());
-        let det = m(0, 0) * m(1, 1) - m(0, 1) * m(1, 0);
-        if !(det > T::zero() && m(0, 0) > T::zero()) {
+        let m00 = slot.ws.mass_q.get((0, 0)).copied().unwrap_or(T::zero());
+        let (adj, det) = slot.mass_adjugate_times(r);
+        if !(det > T::zero() && m00 > T::zero()) {
             return least;
         }
-        let v = [
-            (m(1, 1) * r[0] - m(0, 1) * r[1]) / det,
-            (m(0, 0) * r[1] - m(1, 0) * r[0]) / det,
-        ];
+        let v = [adj[0] / det, adj[1] / det];
         // r·v = r M⁻¹ rᵀ > 0 for M positive definite and r ≠ 0.
         let rv = r[0] * v[0] + r[1] * v[1];
         if rv > T::zero() {

@@ -118,14 +118,16 @@ impl<T: Real> Twin<T> {
             *gk = -(j_c.dot(&(a_c - self.params.gravity)) + k2 * v(row + 2, k) * alpha);
         }
         let r = slot.omega_row(CRANK);
-        let m = |i: usize, j: usize| slot.ws.mass_q.get((i, j)).copied().unwrap_or(T::zero());
         let (num, det) = match dof {
-            1 => (r[0] * g[0], m(0, 0)),
-            _ => (
-                // r M⁻¹ g with M⁻¹ = adj(M)/det.
-                r[0] * (m(1, 1) * g[0] - m(0, 1) * g[1]) + r[1] * (m(0, 0) * g[1] - m(1, 0) * g[0]),
-                m(0, 0) * m(1, 1) - m(0, 1) * m(1, 0),
+            1 => (
+                r[0] * g[0],
+                slot.ws.mass_q.get((0, 0)).copied().unwrap_or(T::zero()),
             ),
+            _ => {
+                // r M⁻¹ g with M⁻¹ = adj(M)/det.
+                let (adj, det) = slot.mass_adjugate_times(g);
+                (r[0] * adj[0] + r[1] * adj[1], det)
+            }
         };
         if det > T::zero() {
             num / det

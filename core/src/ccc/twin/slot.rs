@@ -261,6 +261,20 @@ impl<T: Real> Slot<T> {
         [at(0), at(1)]
     }
 
+    /// `adj(M) x` and `det M` of the 2×2 mass matrix of a 2-DOF mode at the last
+    /// evaluation (`M⁻¹ x = adj(M) x / det M` where `det M > 0`): the solves of the
+    /// crank's correction direction and of its mass sensitivity.
+    pub(super) fn mass_adjugate_times(&self, x: [T; 2]) -> ([T; 2], T) {
+        let m = |i: usize, j: usize| self.ws.mass_q.get((i, j)).copied().unwrap_or(T::zero());
+        (
+            [
+                m(1, 1) * x[0] - m(0, 1) * x[1],
+                m(0, 0) * x[1] - m(1, 0) * x[0],
+            ],
+            m(0, 0) * m(1, 1) - m(0, 1) * m(1, 0),
+        )
+    }
+
     /// Physical link `p`'s angular acceleration at `q̈ = 0` (the bias `a_b` of the last
     /// evaluation, SPEC 1): `α_p = omega_row(p)·q̈ + alpha_bias(p)`. Zero for a link the
     /// mode has no body for.
