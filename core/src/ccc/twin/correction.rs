@@ -24,7 +24,7 @@
 use super::super::build::CRANK;
 use super::super::mode::Mode;
 use super::error::TwinStepError;
-use super::slot::QD;
+use super::slot::{LinkState, QD};
 use super::Twin;
 use crate::scalar::Real;
 
@@ -233,19 +233,32 @@ impl<T: Real> Twin<T> {
             self.restore(w.switched, &saved);
             return Err(e);
         }
+        let energy = self.commit_booked(&w);
+        Ok(self.made(&before, energy))
+    }
+
+    /// Commits `w`'s state, the twin's own moved by an estimator at the present time,
+    /// with the energy the move put in booked in the audit's correction term: the term
+    /// that keeps the residual where it was (the state's energy change less the impact
+    /// losses a mode change booked). Returns that energy, J.
+    pub(super) fn commit_booked(&mut self, w: &super::Work<T>) -> T {
         let links = self.slots.cur().links(&self.params);
-        let mut audit = self.audit_of(&links, &w);
-        // The booked term is what keeps the residual where it was: the state's energy
-        // change less the impact losses a mode change booked.
+        let mut audit = self.audit_of(&links, w);
         let energy = self.audit.residual() - audit.residual();
         audit.correction += energy;
         self.y = w.y;
-        self.commit(&w, audit, links);
+        self.commit(w, audit, links);
+        energy
+    }
+
+    /// The correction made from the crank's state `before` to the twin's, with the
+    /// `energy` booked (J).
+    pub(super) fn made(&self, before: &LinkState<T>, energy: T) -> Correction<T> {
         let after = self.links[CRANK];
-        Ok(Correction {
+        Correction {
             crank: (after.theta - before.theta, after.omega - before.omega),
             energy,
             applied: true,
-        })
+        }
     }
 }

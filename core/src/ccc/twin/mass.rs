@@ -54,12 +54,7 @@ impl<T: Real> Twin<T> {
             self.restore(false, &saved);
             return result.map(|()| T::zero());
         }
-        let links = self.slots.cur().links(&self.params);
-        let mut audit = self.audit_of(&links, &w);
-        let energy = self.audit.residual() - audit.residual();
-        audit.correction += energy;
-        self.commit(&w, audit, links);
-        Ok(energy)
+        Ok(self.commit_booked(&w))
     }
 
     /// The rocker of the parameters into each slot's model that has it.
@@ -139,26 +134,15 @@ impl<T: Real> Twin<T> {
 
 #[cfg(test)]
 mod tests {
-    use super::super::{Inputs, MotorInput, Twin, TwinSettings};
-    use crate::ccc::{CccParams, Mode};
-    use crate::motor::Motor;
+    use super::super::{Inputs, Twin};
+    use crate::ccc::Mode;
     use crate::scalar::Vec2;
     extern crate std;
     use std::boxed::Box;
     use std::vec::Vec;
 
     fn s2() -> (Box<Twin<f64>>, Inputs<f64>) {
-        let inputs = Inputs {
-            motor: MotorInput::Law(Motor::Constant(12.0)),
-            load: 800.0,
-            measured: None,
-        };
-        let twin = Twin::new(
-            CccParams::reference(),
-            TwinSettings::reference(1e-4),
-            inputs,
-        );
-        (Box::new(twin.unwrap()), inputs)
+        super::super::tests::s2(1e-4)
     }
 
     /// The sensitivity against central differences of the crank's acceleration over

@@ -30,6 +30,7 @@ mod correction;
 mod error;
 mod evaluate;
 mod guards;
+mod held_lever;
 mod impact;
 mod inputs;
 mod locate;

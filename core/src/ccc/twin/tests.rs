@@ -35,22 +35,22 @@ fn committed(t: &Twin<f64>) -> String {
     )
 }
 
-/// S2 (12 N·m, T_r = 800 N·m) at h = 1 ms up to its first step committed at rest
-/// (the jam at 0.8185 s), and its inputs.
-fn s2_at_rest() -> (Box<Twin<f64>>, Inputs<f64>) {
+/// S2's twin (12 N·m, T_r = 800 N·m, SPEC's machine) at its start with step `h`
+/// (s), and its inputs: the twin's own tests' fixture.
+pub(super) fn s2(h: f64) -> (Box<Twin<f64>>, Inputs<f64>) {
     let inputs = Inputs {
         motor: MotorInput::Law(Motor::Constant(12.0)),
         load: 800.0,
         measured: None,
     };
-    let mut twin = Box::new(
-        Twin::new(
-            CccParams::reference(),
-            TwinSettings::reference(1e-3),
-            inputs,
-        )
-        .unwrap(),
-    );
+    let twin = Twin::new(CccParams::reference(), TwinSettings::reference(h), inputs);
+    (Box::new(twin.unwrap()), inputs)
+}
+
+/// S2 at h = 1 ms up to its first step committed at rest (the jam at 0.8185 s), and
+/// its inputs.
+fn s2_at_rest() -> (Box<Twin<f64>>, Inputs<f64>) {
+    let (mut twin, inputs) = s2(1e-3);
     for _ in 0..1000 {
         twin.step(&inputs).unwrap();
         if twin.at_rest {
