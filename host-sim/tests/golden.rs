@@ -129,7 +129,7 @@ const PINS: &[Pin<'static>] = &[
     Pin {
         args: "ccc-s2 --f32",
         exit: 0,
-        csv: "ca2bdb79ef88ade478b94a0d3e08c62ea6b04fbcd6a220c41ad5c8d87f859db4",
+        csv: "38b40cdb90b4402b2a5d800b1ad4b8deb39fbcdc5c9a0454d87fe40dab22e09a",
         logs: Some((
             "bc74ea616d87e815889ff06a261472c8c3afab4ab37a3ffb86901101a3d74da4",
             "376b218d2ce54134bc3f519101649e6392f96ab1de9ea2a5dce7c247ab35bd3f",

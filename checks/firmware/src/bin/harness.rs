@@ -14,7 +14,8 @@
 //! The command line (`qemu -append`) selects a canary instead: `fault` (an undefined
 //! instruction: the HardFault handler must exit with failure), `panic`, `hang` (only the
 //! timeout ends it), `perturb` (the first S2 run with its load 2 ulps higher: its digest
-//! must differ from the host's).
+//! must differ from the host's), or `profile<K>`: S2's run K alone (its records only),
+//! for `checks/firmware/profile/run`.
 #![no_std]
 #![no_main]
 
@@ -22,7 +23,7 @@ use core::mem::MaybeUninit;
 use cortex_m_rt::entry;
 use structomat::ccc::Twin;
 use structomat::Simulation;
-use structomat_firmware::{run_all, Counter, Places, MAX_STEPS};
+use structomat_firmware::{run_all, run_s2, Counter, Places, MAX_STEPS};
 
 #[path = "../target.rs"]
 mod target;
@@ -51,7 +52,17 @@ fn main() -> ! {
     // The command line (QEMU's `-append`) asks for the canaries of `run`, which prove
     // that its checks can fail.
     let mut line = [0u8; 128];
-    let perturbed = match target::command_word(&mut line) {
+    let word = target::command_word(&mut line);
+    // `profile<K>`: S2's run K of `RUNS` alone, for an instruction profile of it
+    // (`checks/firmware/profile/run`); no comparison, the run's records only.
+    if let [b'p', b'r', b'o', b'f', b'i', b'l', b'e', k] = *word {
+        let Some(run) = RUNS.get(usize::from(k.wrapping_sub(b'0'))) else {
+            exit(false)
+        };
+        let ok = run_s2(TWIN, COUNTS, &mut systick, &mut out, run, false).is_ok();
+        exit(ok)
+    }
+    let perturbed = match word {
         b"fault" => target::fault_now(),
         b"panic" => panic!("the panic canary"),
         b"hang" => loop {

@@ -340,7 +340,7 @@ impl<T: Real> Slot<T> {
                 what: "motor or load torque",
             });
         }
-        self.ws.applied_moment = [T::zero(); crate::config::MAX_BODIES];
+        self.ws.applied_moment.fill(T::zero());
         let crank_body = self.body(CRANK) as usize;
         if let Some(m) = self.ws.applied_moment.get_mut(crank_body) {
             *m = tm;
@@ -490,29 +490,35 @@ impl<T: Real> Slot<T> {
     }
 
     /// Physical state of links 1..=8 (index 0 unused) at the workspace's evaluation;
-    /// angles as the model holds them (the twin unwraps them).
+    /// angles as the model holds them (the twin unwraps them). Not inlined: inlined
+    /// into its callers it raised the M7 step's painted stack from 14.4 to 15.0 KB for
+    /// 80 instructions a step.
+    #[inline(never)]
     pub fn links(&self, params: &CccParams<T>) -> [LinkState<T>; 9] {
+        // Each link's fields are written from its body read through a reference: a
+        // body copied out to be read and a link built from defaults cost the M7 about
+        // 0.5 k instructions a step in memory copies and clears.
         let mut out = [LinkState::default(); 9];
         for (p, o) in out.iter_mut().enumerate().skip(1) {
-            let b = self.body(p);
             let off = self.map.offset(p);
-            if b == 0 {
+            match self.body(p) {
                 // A locked lever: at rest about H.
-                *o = LinkState {
-                    theta: off,
-                    origin: params.h,
-                    ..LinkState::default()
-                };
-                continue;
+                0 => {
+                    o.theta = off;
+                    o.origin = params.h;
+                }
+                b => match self.ws.body.get(b as usize) {
+                    Some(s) => {
+                        o.theta = s.theta + off;
+                        o.omega = s.omega;
+                        o.alpha = s.alpha;
+                        o.origin = s.o;
+                        o.velocity = s.v;
+                    }
+                    // No such body (a model not built): a body at its default.
+                    None => o.theta = T::zero() + off,
+                },
             }
-            let s = self.ws.body.get(b as usize).copied().unwrap_or_default();
-            *o = LinkState {
-                theta: s.theta + off,
-                omega: s.omega,
-                alpha: s.alpha,
-                origin: s.o,
-                velocity: s.v,
-            };
         }
         out
     }
@@ -522,15 +528,23 @@ impl<T: Real> Slot<T> {
     /// link with an angle offset (a locked lever, lever 8 in A68).
     pub fn frame(&self, p: usize) -> Vec2<T> {
         let off = self.map.offset(p);
+        // `Real::sincos`: in f32 in f32 arithmetic (libm's `sinf` and `cosf` work in
+        // f64 inside, soft-float calls on the M4F: 2.5 k instructions a step of S2
+        // for the locked levers' frames).
+        let turn = |a: T| {
+            let (sin, cos) = a.sincos();
+            Vec2::new(cos, sin)
+        };
         let b = self.body(p);
         if b == 0 {
-            return Vec2::new(off.cos(), off.sin());
+            return turn(off);
         }
-        let s = self.ws.body.get(b as usize).copied().unwrap_or_default();
-        if off == T::zero() {
-            Vec2::new(s.c, s.s)
-        } else {
-            rotate_cs(s.c, s.s, &Vec2::new(off.cos(), off.sin()))
+        match self.ws.body.get(b as usize) {
+            Some(s) if off == T::zero() => Vec2::new(s.c, s.s),
+            Some(s) => rotate_cs(s.c, s.s, &turn(off)),
+            // No such body (a model not built): a body at its default, `(1, 0)`.
+            None if off == T::zero() => Vec2::new(T::one(), T::zero()),
+            None => rotate_cs(T::one(), T::zero(), &turn(off)),
         }
     }
 
@@ -625,12 +639,14 @@ impl<T: Real> Slot<T> {
                 } else if (pi, pj) == (r7 as u8, l6 as u8) {
                     pj = l8 as u8;
                 }
-                for (k, (a, b)) in JOINTS.iter().enumerate() {
-                    if (pi, pj) == (*a, *b) {
-                        out[k] = re.force;
-                    } else if (pi, pj) == (*b, *a) {
-                        out[k] = -re.force;
-                    }
+                let at = JOINT_AT
+                    .get(pi as usize)
+                    .and_then(|row| row.get(pj as usize))
+                    .copied()
+                    .unwrap_or(0);
+                let k = at.unsigned_abs() as usize;
+                if let Some(o) = k.checked_sub(1).and_then(|k| out.get_mut(k)) {
+                    *o = if at > 0 { re.force } else { -re.force };
                 }
             }
         }
@@ -696,6 +712,23 @@ pub const JOINTS: [(u8, u8); 11] = {
     all[9] = (6, 0);
     all[10] = (8, 0);
     all
+};
+
+/// [`JOINTS`] by the pair of physical links: `k + 1` at `[i][j]` for the pair
+/// `JOINTS[k] = (i, j)`, `-(k + 1)` at `[j][i]` (the force on `j` from `i` is the
+/// reaction's opposite), 0 for links that share no joint. A model joint finds its
+/// physical one in one look-up, not by a scan of the eleven (the twin commits the
+/// reactions at every step).
+const JOINT_AT: [[i8; 9]; 9] = {
+    let mut at = [[0i8; 9]; 9];
+    let mut k = 0;
+    while k < JOINTS.len() {
+        let (i, j) = JOINTS[k];
+        at[i as usize][j as usize] = k as i8 + 1;
+        at[j as usize][i as usize] = -(k as i8 + 1);
+        k += 1;
+    }
+    at
 };
 
 /// The index in [`FRICTION_JOINTS`] of each lever's pin (G of lever 6, I of lever 8:

@@ -99,3 +99,31 @@ fn each_link_speed_row_is_the_derivative_of_its_angle() {
         }
     }
 }
+
+/// The joints' look-up table is [`JOINTS`] both ways round, every pair once: the
+/// scan it replaced (each model joint against the eleven) finds the same joint.
+#[test]
+fn the_joint_table_is_the_joint_list_both_ways() {
+    use super::{JOINTS, JOINT_AT};
+    let mut found = 0;
+    for i in 0..9u8 {
+        for j in 0..9u8 {
+            let scan = JOINTS.iter().enumerate().find_map(|(k, &(a, b))| {
+                if (i, j) == (a, b) {
+                    Some(k as i8 + 1)
+                } else if (i, j) == (b, a) {
+                    Some(-(k as i8 + 1))
+                } else {
+                    None
+                }
+            });
+            assert_eq!(
+                JOINT_AT[i as usize][j as usize],
+                scan.unwrap_or(0),
+                "({i}, {j})"
+            );
+            found += usize::from(scan.is_some());
+        }
+    }
+    assert_eq!(found, 2 * JOINTS.len());
+}
