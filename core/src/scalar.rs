@@ -89,7 +89,34 @@ impl Real for f32 {
     }
     #[inline(always)]
     fn root(self) -> Self {
-        nalgebra::ComplexField::sqrt(self)
+        #[cfg(all(feature = "arm-vsqrt-f32", target_arch = "arm"))]
+        {
+            let bits: u32;
+            // SAFETY: FPU instructions on registers only: no memory, no stack, no
+            // condition flags. S0 is borrowed and given back within the block (Rust's
+            // S-register operands need the `vfp2` target feature, which names a
+            // double-precision FPU the M4F lacks: its single-precision FPv4-SP does
+            // `VSQRT.F32` all the same). The feature promises an FPU; without one the
+            // assembler refuses the instructions.
+            unsafe {
+                core::arch::asm!(
+                    "vmov {keep}, s0",
+                    "vmov s0, {x}",
+                    "vsqrt.f32 s0, s0",
+                    "vmov {r}, s0",
+                    "vmov s0, {keep}",
+                    x = in(reg) self.to_bits(),
+                    r = lateout(reg) bits,
+                    keep = out(reg) _,
+                    options(pure, nomem, nostack, preserves_flags)
+                );
+            }
+            f32::from_bits(bits)
+        }
+        #[cfg(not(all(feature = "arm-vsqrt-f32", target_arch = "arm")))]
+        {
+            nalgebra::ComplexField::sqrt(self)
+        }
     }
     #[inline]
     fn sincos(self) -> (Self, Self) {
