@@ -687,8 +687,8 @@ impl<T: Real> TwinObserver<T> {
     /// The locked lever's update (I6, I8; [`ObserverSettings::held_gain`]) where the
     /// crank's transmission `r0` is under `min_transmission`: `nu` the crank's
     /// innovation and `res` the encoder's resolution, rad. `None` where nothing is
-    /// outside the band, the mode has no locked lever or the crank does not move
-    /// with it.
+    /// outside the band, or the crank does not move with a locked lever (none in the
+    /// mode: a sensitivity of 0).
     fn correct_held_lever(
         &mut self,
         twin: &mut Twin<T>,
@@ -698,7 +698,7 @@ impl<T: Real> TwinObserver<T> {
     ) -> Result<Option<Correction<T>>, TwinStepError> {
         let s = self.settings;
         let nu = outside(nu, s.state_band * res);
-        if nu == T::zero() || twin.held_lever_angle().is_none() {
+        if nu == T::zero() {
             return Ok(None);
         }
         let sens = twin.held_lever_sensitivity();

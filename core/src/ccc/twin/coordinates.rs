@@ -5,7 +5,7 @@ use super::super::mode::{Coordinates, Mode};
 use super::super::params::CccParams;
 use super::error::{Failure, TwinStepError};
 use super::inputs::Inputs;
-use super::slot::{physical, Slot};
+use super::slot::{physical, LinkState, Slot};
 use super::{joint_gap, load_state, Twin, Work};
 use crate::error::StepError;
 use crate::scalar::Real;
@@ -232,11 +232,7 @@ impl<T: Real> Twin<T> {
     ) -> Result<(), TwinStepError> {
         let links = self.slots.cur().links(&self.params);
         let from = self.slots.cur().coords;
-        self.take_candidate(w);
-        let omega: [T; 9] = core::array::from_fn(|p| links[p].omega);
-        load_state(self.slots.cur(), q, &omega, &mut w.y);
-        self.dp5.invalidate();
-        self.restart_at(w, inputs)?;
+        self.adopt_scratch(w, inputs, q, &links)?;
         let after = self.slots.cur().links(&self.params);
         let position_gap = joint_gap(&self.params, &links, &after);
         let speed_gap = (1..9).fold(T::zero(), |e, p| {
@@ -254,6 +250,24 @@ impl<T: Real> Twin<T> {
             speed_gap,
         });
         Ok(())
+    }
+
+    /// Makes the scratch slot, assembled at `w`'s pose with coordinates `q`, the
+    /// current one and restarts DP5 there: the state's coordinate rates from the
+    /// physical links' speeds `links` (the state before, carried over) and the full
+    /// evaluation at it. A coordinate switch and a move of the locked lever end so.
+    pub(super) fn adopt_scratch(
+        &mut self,
+        w: &mut Work<T>,
+        inputs: &Inputs<T>,
+        q: &[T; 2],
+        links: &[LinkState<T>; 9],
+    ) -> Result<(), TwinStepError> {
+        self.take_candidate(w);
+        let omega: [T; 9] = core::array::from_fn(|p| links[p].omega);
+        load_state(self.slots.cur(), q, &omega, &mut w.y);
+        self.dp5.invalidate();
+        self.restart_at(w, inputs)
     }
 
     /// The best conditioned of the mode's other coordinate choices at `w`'s state

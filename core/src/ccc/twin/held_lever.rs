@@ -17,7 +17,7 @@ use super::super::build::{BRANCHES, CRANK};
 use super::super::mode::{Clutch, Mode};
 use super::correction::Correction;
 use super::error::TwinStepError;
-use super::{load_state, Twin};
+use super::Twin;
 use crate::error::StepError;
 use crate::scalar::Real;
 
@@ -94,7 +94,7 @@ impl<T: Real> Twin<T> {
         let saved = self.slots.cur().ws.warm_start();
         let before = self.links[CRANK];
         let links = self.slots.cur().links(&self.params);
-        let mut pose = self.slot_links_unwrapped();
+        let mut pose = self.unwrapped(&links);
         if let Some(a) = pose.get_mut(lever) {
             *a += d;
         }
@@ -105,15 +105,11 @@ impl<T: Real> Twin<T> {
             Err(TwinStepError::Step(StepError::Group { .. })) => return Ok(Correction::none()),
             Err(e) => return Err(e),
         };
-        self.dp5.invalidate();
         self.last_guards = None;
         self.at_rest = false;
         let g0 = self.guards;
         let mut w = self.work_from_state();
-        self.take_candidate(&mut w);
-        let omega: [T; 9] = core::array::from_fn(|p| links[p].omega);
-        load_state(self.slots.cur(), &q, &omega, &mut w.y);
-        let result = self.restart_at(&w, &inputs);
+        let result = self.adopt_scratch(&mut w, &inputs, &q, &links);
         if result.is_err() || !g0.fired(&self.guards).is_empty() {
             self.restore(w.switched, &saved);
             return result.map(|()| Correction::none());

@@ -632,9 +632,13 @@ impl<T: Real> Twin<T> {
 
     /// Physical angles of the slot's links, unwrapped against the last committed ones.
     fn slot_links_unwrapped(&self) -> [T; 9] {
-        let links = self.slots.cur().links(&self.params);
+        self.unwrapped(&self.slots.cur().links(&self.params))
+    }
+
+    /// The angles of the physical `links`, unwrapped against the last committed ones.
+    fn unwrapped(&self, links: &[LinkState<T>; 9]) -> [T; 9] {
         let mut out = [T::zero(); 9];
-        for ((o, now), last) in out.iter_mut().zip(&links).zip(&self.links).skip(1) {
+        for ((o, now), last) in out.iter_mut().zip(links).zip(&self.links).skip(1) {
             *o = unwrap_near(now.theta, last.theta);
         }
         out
