@@ -20,6 +20,12 @@ pub fn line_height(s: TextSize) -> usize {
     raster_height(s).val()
 }
 
+/// Whether the PNG's font draws `ch` (else it draws `?`): Latin letters and Latin-1's
+/// signs (`·`, `°`, `²`), no Greek.
+pub fn has_glyph(ch: char) -> bool {
+    get_raster(ch, FontWeight::Regular, RasterHeight::Size16).is_some()
+}
+
 /// Advance of one character, px (regular and bold have the same width).
 pub fn advance(s: TextSize) -> usize {
     get_raster_width(FontWeight::Regular, raster_height(s))
