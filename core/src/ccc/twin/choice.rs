@@ -63,7 +63,7 @@ impl<T: Real> Twin<T> {
             omega: shaft,
             accel: self.coast.accel,
         };
-        if w.audit_at_events {
+        if w.audit_at_events && !core::mem::take(&mut w.event_audited) {
             // A finer rung would redo the step, this event and its choice: stop here
             // if the state at the event already breaks the energy balance.
             self.balance_within(w, &links, T::c(EVENT_AUDIT_MARGIN))?;

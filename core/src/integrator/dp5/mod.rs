@@ -233,6 +233,21 @@ impl<T: Real, const N: usize> Dp5<T, N> {
         self.seeded = true;
     }
 
+    /// Seeds the next step with the last step's first stage and returns that step's
+    /// start `(t0, y0)`, `None` before the first step. A step from there (of any
+    /// length) then takes 6 evaluations: a step redone shorter, to land exactly on a
+    /// time inside the last one (the dense output is an order less accurate than a
+    /// step's end).
+    pub fn seed_last_start(&mut self) -> Option<(T, SVector<T, N>)> {
+        if !self.has_last {
+            return None;
+        }
+        let last = self.last();
+        let (t0, y0, k1) = (last.t0, last.y0, last.k[0]);
+        self.seed(t0, &y0, &k1);
+        Some((t0, y0))
+    }
+
     /// Number of calls to [`OdeSystem::eval`] so far, failing calls included:
     /// 7 for a step without a valid FSAL stage, 6 with one.
     pub fn evaluations(&self) -> u64 {

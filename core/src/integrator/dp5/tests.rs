@@ -281,6 +281,47 @@ fn seeded_step_takes_six_evaluations_and_the_same_bits() {
     assert_eq!(sys.evals - before, 7, "seed forgotten by invalidate()");
 }
 
+/// A step redone shorter from the last step's start ([`Dp5::seed_last_start`]): the
+/// same bits as a fresh stepper's step of that length from there, in 6 evaluations
+/// (the first stage kept), and closer to `exp(λ t)` at its end than the dense output
+/// of the longer step there (5th order against the interpolant's 4th).
+#[test]
+fn a_step_redone_shorter_from_the_last_start_is_a_fresh_step_in_six_evaluations() {
+    let lambda = -2.0;
+    let mut sys = Lin { lambda, evals: 0 };
+    let (t0, y0, h, theta) = (0.25, Vector1::new(0.75), 0.2, 0.6);
+    let mut dp = Dp5::<f64, 1>::new();
+    assert_eq!(dp.seed_last_start(), None, "no step yet");
+    let (mut t, mut y) = (t0, y0);
+    dp.step(&mut sys, &mut t, &mut y, h).unwrap();
+    let mut dense = Vector1::zeros();
+    dp.dense(theta, &mut dense);
+    let before = sys.evals;
+    let (ts, ys) = dp.seed_last_start().expect("a step was taken");
+    assert_eq!(
+        (ts.to_bits(), ys[0].to_bits()),
+        (t0.to_bits(), y0[0].to_bits())
+    );
+    let (mut t, mut y) = (ts, ys);
+    dp.step(&mut sys, &mut t, &mut y, theta * h).unwrap();
+    assert_eq!(sys.evals - before, 6);
+    let mut fresh = Dp5::<f64, 1>::new();
+    let (mut tf, mut yf) = (t0, y0);
+    fresh.step(&mut sys, &mut tf, &mut yf, theta * h).unwrap();
+    assert_eq!(
+        (t.to_bits(), y[0].to_bits()),
+        (tf.to_bits(), yf[0].to_bits())
+    );
+    let exact = y0[0] * (lambda * theta * h).exp();
+    let (e_step, e_dense) = ((y[0] - exact).abs(), (dense[0] - exact).abs());
+    println!("at θ = {theta}: step's error {e_step:e}, dense output's {e_dense:e}");
+    assert!(e_step < e_dense / 10.0, "{e_step:e} vs {e_dense:e}");
+    // The redone step is now the last one: its end is the next step's FSAL stage.
+    let before = sys.evals;
+    dp.step(&mut sys, &mut t, &mut y, h).unwrap();
+    assert_eq!(sys.evals - before, 6);
+}
+
 #[test]
 fn dense_endpoints_are_exact() {
     let mut sys = Osc { w2: 3.0 };
