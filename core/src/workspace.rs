@@ -62,18 +62,24 @@ pub struct Reaction<T: Real> {
 }
 
 /// Each group's unknowns (rad or m), in sequence order: the warm start of its
-/// Newton-Raphson.
-pub type GroupUnknowns<T> = [[T; MAX_GROUP_VARS]; MAX_GROUPS];
+/// Newton-Raphson. As many as the workspace has groups, with no padding: a step saves
+/// them before each DP5 step, and a zeroed array of the core's limits (8 groups) cost
+/// its copies and clears.
+pub type GroupUnknowns<T> = heapless::Vec<[T; MAX_GROUP_VARS], MAX_GROUPS>;
+
+/// One group's warm start: its unknowns and their cosines and sines.
+pub type GroupWarmStart<T> = ([T; MAX_GROUP_VARS], [Vec2<T>; MAX_GROUP_VARS]);
 
 /// The groups' warm starts as an evaluation left them: each group's unknowns and their
 /// cosines and sines ([`GroupData::trig`]). Restored together, a re-evaluation of the
-/// state they were saved at reproduces its bits; a step taken back restores them.
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// state they were saved at reproduces its bits; a step taken back restores them. As
+/// many as the workspace has groups (a step saves them before each attempt: the
+/// zeroed arrays of the core's limits, 1.2 KB in f64, cost the Cortex-M7 about 2k
+/// instructions a step in clears and copies).
+#[derive(Clone, Debug, PartialEq)]
 pub struct WarmStart<T: Real> {
-    /// Each group's unknowns.
-    pub unknowns: GroupUnknowns<T>,
-    /// Their cosines and sines.
-    pub trig: [[Vec2<T>; MAX_GROUP_VARS]; MAX_GROUPS],
+    /// Each group's.
+    pub groups: heapless::Vec<GroupWarmStart<T>, MAX_GROUPS>,
 }
 
 /// One group's Newton predictor: `∂x/∂q`, the bias accelerations and where they were
@@ -323,24 +329,18 @@ impl<T: Real, C: Capacity<T>> Workspace<T, C> {
 
     /// The groups' warm starts, to restore with [`Workspace::restore_warm_start`].
     pub fn warm_start(&self) -> WarmStart<T> {
-        let mut trig = [[Vec2::zeros(); MAX_GROUP_VARS]; MAX_GROUPS];
-        for (t, g) in trig.iter_mut().zip(self.group.iter()) {
-            *t = g.trig;
+        let mut groups = heapless::Vec::new();
+        for g in self.group.iter() {
+            // Never full: the workspace holds at most MAX_GROUPS groups.
+            let _ = groups.push((g.x, g.trig));
         }
-        WarmStart {
-            unknowns: self.unknowns(),
-            trig,
-        }
+        WarmStart { groups }
     }
 
     /// Sets the groups' unknowns and their cosines and sines to `saved` (those of the
     /// saved unknowns: Newton starts from them as they are).
     pub fn restore_warm_start(&mut self, saved: &WarmStart<T>) {
-        for (g, (x, trig)) in self
-            .group
-            .iter_mut()
-            .zip(saved.unknowns.iter().zip(saved.trig.iter()))
-        {
+        for (g, (x, trig)) in self.group.iter_mut().zip(saved.groups.iter()) {
             g.x = *x;
             g.trig = *trig;
             g.trig_at = *x;
@@ -373,9 +373,10 @@ impl<T: Real, C: Capacity<T>> Workspace<T, C> {
 
     /// The groups' unknowns alone.
     pub fn unknowns(&self) -> GroupUnknowns<T> {
-        let mut x = [[T::zero(); MAX_GROUP_VARS]; MAX_GROUPS];
-        for (x, g) in x.iter_mut().zip(self.group.iter()) {
-            *x = g.x;
+        let mut x = heapless::Vec::new();
+        for g in self.group.iter() {
+            // Never full (see `warm_start`).
+            let _ = x.push(g.x);
         }
         x
     }

@@ -569,41 +569,6 @@ crank_friction_estimate
         assert!(observer_figure(&plain).is_none());
     }
 
-    /// Every text of an observed converter run's figures is drawn by the PNG's font
-    /// (a character it lacks is drawn as `?`): the columns a replay with the observer
-    /// writes, every panel present.
-    #[test]
-    fn every_text_of_the_figures_has_its_glyphs() {
-        use crate::draw::{raster::has_glyph, Shape};
-        let names = "t,mode,mode_code,coords,q1,q2,qd1,qd2,theta1,theta2,theta3,theta4,\
-theta5,theta6,theta7,theta8,omega1,omega2,omega3,omega4,omega5,omega6,omega7,omega8,\
-shaft_speed,shaft_angle,c6,c8,motor_torque,R_A,R_B,R_C,R_E,R_F,R_D5,R_D7,R_G,R_I,R_H6,\
-R_H8,kinetic,potential,motor_work,load_work,impact_loss,audit_residual,crank_counts,\
-twin_crank_counts,crank_residual,shaft_counts,twin_shaft_counts,shaft_residual,\
-crank_innovation,crank_sigma,shaft_innovation,crank_torque_estimate,\
-crank_friction_estimate,oscillating_mass,crank_jump,shaft_jump,clutch_slip,\
-failed_catch,load_bias";
-        let mut t = Table::new(names.split(',').map(String::from).collect());
-        for k in 0..3 {
-            let row: Vec<f64> = (0..t.names.len()).map(|c| (k + c) as f64 * 0.1).collect();
-            t.push_row(&row);
-        }
-        let figures = plots(&t, "run");
-        assert!(figures.len() > 5, "{} figures", figures.len());
-        let mut texts = 0;
-        for (file, fig) in &figures {
-            for shape in &fig.shapes {
-                if let Shape::Text(x) = shape {
-                    texts += 1;
-                    let missing: String = x.text.chars().filter(|c| !has_glyph(*c)).collect();
-                    assert!(missing.is_empty(), "{file}: {:?} lacks {missing:?}", x.text);
-                }
-            }
-        }
-        assert!(texts > 100, "{texts} texts");
-        assert!(!has_glyph('ω'), "the font has no Greek: the check can fail");
-    }
-
     #[test]
     fn mechanism_columns_by_prefix() {
         let t = Table::new(

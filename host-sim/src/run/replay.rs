@@ -351,6 +351,16 @@ impl fmt::Display for ReplaySummary {
     }
 }
 
+/// The columns a replay writes after the converter's ([`converter::columns`]): the
+/// residuals', then the observer's when it observes.
+fn extra_columns(observed: bool) -> Vec<String> {
+    let mut columns = RESIDUAL_COLUMNS.map(String::from).to_vec();
+    if observed {
+        columns.extend(OBSERVER_COLUMNS.map(String::from));
+    }
+    columns
+}
+
 /// Replays `log` on the twin of `settings` (named `name`) in scalar `T`, telling `obs`
 /// every state, the state rows with [`RESIDUAL_COLUMNS`] and the log lines; with
 /// `clutch`, pairs the machine's events with the twin's.
@@ -417,12 +427,8 @@ pub fn simulate_with<T: Real>(
     // The last step's update and the crank angle's variance after it, rad².
     let update: Shared<Option<(Update<T>, T)>> = Shared::new(None);
     let mut watch = observer.map(|_| ObservedSummary::default());
-    let mut columns = RESIDUAL_COLUMNS.map(String::from).to_vec();
-    if observer.is_some() {
-        columns.extend(OBSERVER_COLUMNS.map(String::from));
-    }
     let mut extra = Extra {
-        columns,
+        columns: extra_columns(observer.is_some()),
         // A row at every state (`every` is 1): each sample's residuals counted once.
         cells: Box::new(|twin: &Twin<T>, cells: &mut Vec<Cell<'static, T>>| {
             let k = usize::try_from(twin.steps()).unwrap_or(usize::MAX);
@@ -573,5 +579,40 @@ pub fn execute(opts: &ReplayOptions, stdout: &mut dyn Write, stderr: &mut dyn Wr
             summary.exit_code()
         }
         Err(e) => report_run_error(e, stderr),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::draw::{raster::has_glyph, Shape};
+    use crate::output::plot::{plots, Table};
+
+    /// Every text of an observed replay's figures is drawn by the PNG's font (a
+    /// character it lacks is drawn as `?`): the columns as the replay writes them (the
+    /// converter's and [`extra_columns`]), every panel present.
+    #[test]
+    fn every_text_of_an_observed_replays_figures_has_its_glyphs() {
+        let mut names = converter::columns();
+        names.extend(extra_columns(true));
+        let mut t = Table::new(names);
+        for k in 0..3 {
+            let row: Vec<f64> = (0..t.names.len()).map(|c| (k + c) as f64 * 0.1).collect();
+            t.push_row(&row);
+        }
+        let figures = plots(&t, "run");
+        assert!(figures.len() > 5, "{} figures", figures.len());
+        let mut texts = 0;
+        for (file, fig) in &figures {
+            for shape in &fig.shapes {
+                if let Shape::Text(x) = shape {
+                    texts += 1;
+                    let missing: String = x.text.chars().filter(|c| !has_glyph(*c)).collect();
+                    assert!(missing.is_empty(), "{file}: {:?} lacks {missing:?}", x.text);
+                }
+            }
+        }
+        assert!(texts > 100, "{texts} texts");
+        assert!(!has_glyph('ω'), "the font has no Greek: the check can fail");
     }
 }
