@@ -8,7 +8,7 @@ use crate::model::Model;
 use crate::scalar::Real;
 use crate::structomat::{
     acceleration_pass, dyad_rrr, dyad_rrt, dyad_rtr, motor_r, newton, position_from_x,
-    velocity_pass, Base, Group, GroupData, GroupKind, Term,
+    velocity_pass, Angles, Base, Group, GroupData, GroupKind, Term,
 };
 use crate::workspace::{BodyState, Workspace};
 
@@ -51,11 +51,37 @@ fn solve_group<T: Real, C: Capacity<T>>(
     q: &[T],
     qd: &[T],
 ) -> Result<T, GroupFault> {
+    solve_group_as(g, gd, model, bodies, q, qd, Angles::Record)
+}
+
+/// [`solve_group`] with the links' angles left stale ([`Angles::Stale`]).
+fn solve_group_stale<T: Real, C: Capacity<T>>(
+    g: &Group<T>,
+    gd: &mut GroupData<T>,
+    model: &Model<T, C>,
+    bodies: &mut [BodyState<T>],
+    q: &[T],
+    qd: &[T],
+) -> Result<T, GroupFault> {
+    solve_group_as(g, gd, model, bodies, q, qd, Angles::Stale)
+}
+
+fn solve_group_as<T: Real, C: Capacity<T>>(
+    g: &Group<T>,
+    gd: &mut GroupData<T>,
+    model: &Model<T, C>,
+    bodies: &mut [BodyState<T>],
+    q: &[T],
+    qd: &[T],
+    angles: Angles,
+) -> Result<T, GroupFault> {
     match g.kind {
         // Linear loop closures (TRT, RTT): one Newton step from anywhere is exact.
         k if k.solved_by_newton() => return newton::solve(g, gd, model, bodies, q, qd),
         // The RRR dyad factors W and places its links itself (closed forms).
-        GroupKind::Rrr => return dyad_rrr::solve(g, gd, model, bodies, model.singular_tol()),
+        GroupKind::Rrr => {
+            return dyad_rrr::solve(g, gd, model, bodies, model.singular_tol(), angles)
+        }
         GroupKind::MotorR => return motor_r::position(g, gd, model, bodies, q),
         GroupKind::Rrt => dyad_rrt::solve(g, gd, model, bodies)?,
         GroupKind::Rtr => dyad_rtr::solve(g, gd, model, bodies)?,
@@ -75,6 +101,20 @@ pub fn position<T: Real, C: Capacity<T>>(
     time: f64,
 ) -> Result<(), StepError> {
     position_by(model, ws, q, time, solve_group)
+}
+
+/// [`position`], the dyads' angles recorded or left stale (`angles`, see [`Angles`]).
+pub fn position_with<T: Real, C: Capacity<T>>(
+    model: &Model<T, C>,
+    ws: &mut Workspace<T, C>,
+    q: &[T],
+    time: f64,
+    angles: Angles,
+) -> Result<(), StepError> {
+    match angles {
+        Angles::Record => position_by(model, ws, q, time, solve_group),
+        Angles::Stale => position_by(model, ws, q, time, solve_group_stale),
+    }
 }
 
 /// A group's position solver: closed form where there is one, or Newton-Raphson.

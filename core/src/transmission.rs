@@ -11,9 +11,10 @@
 use crate::capacity::Capacity;
 use crate::config::{MAX_BODIES, MAX_DOF, MAX_GROUPS, MAX_GROUP_VARS, POSE_ROWS};
 use crate::error::StepError;
-use crate::kinematics::{acceleration, position, unit_rate, velocity};
+use crate::kinematics::{acceleration, position_with, unit_rate, velocity};
 use crate::model::Model;
 use crate::scalar::{perp, rotate_cs, Real, Vec2};
+use crate::structomat::Angles;
 use crate::structomat::GroupData;
 use crate::workspace::{BodyState, Workspace};
 use nalgebra::{SMatrix, SVector};
@@ -84,7 +85,19 @@ pub fn evaluate<T: Real, C: Capacity<T>>(
     qd: &[T],
     time: f64,
 ) -> Result<(), StepError> {
-    evaluate_velocities(model, ws, q, qd, time)?;
+    evaluate_with(model, ws, q, qd, time, Angles::Record)
+}
+
+/// [`evaluate`], the dyads' angles recorded or left stale (`angles`, see [`Angles`]).
+pub fn evaluate_with<T: Real, C: Capacity<T>>(
+    model: &Model<T, C>,
+    ws: &mut Workspace<T, C>,
+    q: &[T],
+    qd: &[T],
+    time: f64,
+    angles: Angles,
+) -> Result<(), StepError> {
+    evaluate_velocities_with(model, ws, q, qd, time, angles)?;
     let zero = [T::zero(); MAX_DOF];
     acceleration(model, ws, qd, &zero);
     cog_accelerations(model, &ws.body, &mut ws.a_bias);
@@ -105,13 +118,26 @@ pub fn evaluate_velocities<T: Real, C: Capacity<T>>(
     qd: &[T],
     time: f64,
 ) -> Result<(), StepError> {
+    evaluate_velocities_with(model, ws, q, qd, time, Angles::Record)
+}
+
+/// [`evaluate_velocities`], the dyads' angles recorded or left stale (`angles`, see
+/// [`Angles`]).
+pub fn evaluate_velocities_with<T: Real, C: Capacity<T>>(
+    model: &Model<T, C>,
+    ws: &mut Workspace<T, C>,
+    q: &[T],
+    qd: &[T],
+    time: f64,
+    angles: Angles,
+) -> Result<(), StepError> {
     if qd.iter().any(|v| !v.finite()) {
         return Err(StepError::NonFinite {
             time,
             what: "generalized speeds",
         });
     }
-    position(model, ws, q, time)?;
+    position_with(model, ws, q, time, angles)?;
     let m = model.dof().min(MAX_DOF);
     let nb = (model.n_links() + 1).min(MAX_BODIES);
     for j in 0..m {

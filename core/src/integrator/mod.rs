@@ -30,4 +30,10 @@ pub trait OdeSystem<T: Real, const N: usize> {
     type Error;
     /// Writes `f(t, y)` into `dy`.
     fn eval(&mut self, t: T, y: &SVector<T, N>, dy: &mut SVector<T, N>) -> Result<(), Self::Error>;
+
+    /// Says whether the next [`OdeSystem::eval`] is an inner stage of a step: one whose
+    /// state nothing but its rates leaves (a Runge-Kutta stage before the step's end).
+    /// A system may skip there what only the state's own outputs need. The default
+    /// does nothing.
+    fn inner_stage(&mut self, _inner: bool) {}
 }

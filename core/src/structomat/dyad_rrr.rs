@@ -6,8 +6,8 @@
 
 use super::chain::{link_acceleration, link_velocity, place_link};
 use super::{
-    extend, guesses, point_acc, point_pos, point_vel, push_chain, Angle, Base, Group, GroupData,
-    GroupKind, Joint, JointKind, Placement, PointRef, Term, TermCache,
+    extend, guesses, point_acc, point_pos, point_vel, push_chain, Angle, Angles, Base, Group,
+    GroupData, GroupKind, Joint, JointKind, Placement, PointRef, Term, TermCache,
 };
 use crate::capacity::Capacity;
 use crate::config::MAX_GROUP_VARS;
@@ -174,6 +174,7 @@ pub(crate) fn solve<T: Real, C: Capacity<T>>(
     model: &Model<T, C>,
     bodies: &mut [BodyState<T>],
     singular_tol: T,
+    angles: Angles,
 ) -> Result<T, GroupFault> {
     let (start, end, pl_a, pl_b) = parts(g)?;
     let [la, lb, ca, sa, cb, sb, alpha_a, alpha_b] = g.consts;
@@ -202,7 +203,10 @@ pub(crate) fn solve<T: Real, C: Capacity<T>>(
     // θ = ∠u - α: turn u back by α.
     let trig_a = Vec2::new(ua.x * ca + ua.y * sa, ua.y * ca - ua.x * sa);
     let trig_b = Vec2::new(ub.x * cb + ub.y * sb, ub.y * cb - ub.x * sb);
-    let (theta_a, theta_b) = (ua.y.atan2(ua.x) - alpha_a, ub.y.atan2(ub.x) - alpha_b);
+    let (theta_a, theta_b) = match angles {
+        Angles::Record => (ua.y.atan2(ua.x) - alpha_a, ub.y.atan2(ub.x) - alpha_b),
+        Angles::Stale => (gd.x[0], gd.x[1]),
+    };
     gd.x[0] = theta_a;
     gd.x[1] = theta_b;
     gd.trig[0] = trig_a;

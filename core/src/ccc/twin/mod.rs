@@ -98,7 +98,7 @@ use slots::Slots;
 /// converter; the mode choice builds its reference model in the one it leaves free
 /// (the core asserts the budgets at compile time: 64 KiB and 32 KiB). A step's
 /// stack high-water is about 14 KiB in f64 and 8.5 KiB in f32 on x86_64 (S2, events
-/// included), 13.1 and 8.2 KiB painted on the Cortex-M boards.
+/// included), 12.5 and 8.1 KiB painted on the Cortex-M boards.
 ///
 /// **Step sizes.** h = 1e-4 s is the reference in f64 (S2's events within 1e-6 s of
 /// h = 5e-5 s); h = 2e-4 s is the recommended f32 step (the largest with no step
@@ -540,6 +540,7 @@ impl<T: Real> Twin<T> {
             drive: self.drive,
             friction: self.lossy.then_some(&self.params.friction),
             coast: self.coast,
+            inner: false,
         };
         let Err(e) = self.dp5.step(&mut sys, &mut w.t, &mut w.y, h) else {
             return Ok(true);

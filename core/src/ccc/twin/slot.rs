@@ -8,7 +8,7 @@ use super::super::params::{CccParams, Friction, FRICTION_JOINTS};
 use super::capacity::Converter;
 use super::coast::Coast;
 use super::error::TwinStepError;
-use super::inputs::Inputs;
+use super::inputs::{Inputs, MotorInput};
 use crate::dynamics::solve_accelerations;
 use crate::error::{GroupId, StepError};
 use crate::in_place::uninit;
@@ -16,10 +16,11 @@ use crate::integrator::OdeSystem;
 use crate::kinematics::assemble;
 use crate::kinematics::{group_id, position};
 use crate::model::Model;
+use crate::motor::Motor;
 use crate::scalar::{cross, perp, rotate_cs, Real, Vec2};
-use crate::structomat::GroupKind;
 use crate::structomat::JointKind;
-use crate::transmission::{evaluate, evaluate_velocities};
+use crate::structomat::{Angles, GroupKind};
+use crate::transmission::{evaluate_velocities, evaluate_with};
 use crate::workspace::Workspace;
 use core::mem::MaybeUninit;
 use core::ptr::addr_of_mut;
@@ -322,11 +323,28 @@ impl<T: Real> Slot<T> {
         friction: Option<&Friction<T>>,
         shaft: T,
     ) -> Result<(), StepError> {
+        self.eval_with(t, y, inputs, (drive, friction, shaft), Angles::Record)
+    }
+
+    /// [`Slot::eval`], the dyads' link angles recorded or left stale (`angles`: stale
+    /// only where the motor law does not read the crank's angle, see [`Angles`]).
+    fn eval_with(
+        &mut self,
+        t: T,
+        y: &SVector<T, STATE>,
+        inputs: &Inputs<T>,
+        (drive, friction, shaft): (T, Option<&Friction<T>>, T),
+        angles: Angles,
+    ) -> Result<(), StepError> {
         let n = self.map.dof.min(2);
         let s = y.as_slice();
         let q = s.get(..n).unwrap_or(&[]);
         let qd = s.get(QD..QD + n).unwrap_or(&[]);
-        evaluate(&self.model, &mut self.ws, q, qd, t.to_f64())?;
+        let angles = match inputs.motor {
+            MotorInput::Law(Motor::User(_)) => Angles::Record,
+            _ => angles,
+        };
+        evaluate_with(&self.model, &mut self.ws, q, qd, t.to_f64(), angles)?;
         let crank = self
             .ws
             .body
@@ -770,6 +788,10 @@ pub(crate) struct Equations<'a, T: Real> {
     pub friction: Option<&'a Friction<T>>,
     /// The coasting shaft's motion ([`Mode::Coast`]).
     pub coast: Coast<T>,
+    /// Whether the next evaluation is an inner stage of the integrator's step: its
+    /// links' angles are left stale ([`Angles::Stale`]; only a step's end is a state
+    /// the twin reads its links at). False until the integrator says.
+    pub inner: bool,
 }
 
 impl<T: Real> OdeSystem<T, STATE> for Equations<'_, T> {
@@ -781,12 +803,26 @@ impl<T: Real> OdeSystem<T, STATE> for Equations<'_, T> {
         dy: &mut SVector<T, STATE>,
     ) -> Result<(), StepError> {
         let shaft = self.coast.omega_at(t);
-        self.slot
-            .eval(t, y, self.inputs, self.drive, self.friction, shaft)?;
+        let angles = if self.inner {
+            Angles::Stale
+        } else {
+            Angles::Record
+        };
+        self.slot.eval_with(
+            t,
+            y,
+            self.inputs,
+            (self.drive, self.friction, shaft),
+            angles,
+        )?;
         *dy = self
             .slot
             .rates(y, self.inputs, self.drive, self.friction, shaft);
         Ok(())
+    }
+
+    fn inner_stage(&mut self, inner: bool) {
+        self.inner = inner;
     }
 }
 

@@ -131,15 +131,18 @@ fn same_bits<T: Real>(a: T, b: T) -> bool {
     a.to_f64().to_bits() == b.to_f64().to_bits()
 }
 
-/// Counts and performs one evaluation of `sys`.
+/// Counts and performs one evaluation of `sys`, an inner stage (`inner`: every stage
+/// but the last, `f(t1, y1)`, whose state is the step's end) or not.
 fn eval<T: Real, const N: usize, S: OdeSystem<T, N>>(
     sys: &mut S,
     count: &mut u64,
+    inner: bool,
     t: T,
     y: &SVector<T, N>,
     dy: &mut SVector<T, N>,
 ) -> Result<(), S::Error> {
     *count = count.saturating_add(1);
+    sys.inner_stage(inner);
     sys.eval(t, y, dy)
 }
 
@@ -318,20 +321,20 @@ impl<T: Real, const N: usize> Dp5<T, N> {
             *k1 = last.k[6];
         } else if !seeded {
             // (Seeded: `k1` already holds f(t, y).)
-            eval(sys, ev, t, y, k1)?;
+            eval(sys, ev, true, t, y, k1)?;
         }
         let yt = stage_input(y, h, [&*k1], &a[1]);
-        eval(sys, ev, t + T::c(c[1]) * h, &yt, k2)?;
+        eval(sys, ev, true, t + T::c(c[1]) * h, &yt, k2)?;
         let yt = stage_input(y, h, [&*k1, &*k2], &a[2]);
-        eval(sys, ev, t + T::c(c[2]) * h, &yt, k3)?;
+        eval(sys, ev, true, t + T::c(c[2]) * h, &yt, k3)?;
         let yt = stage_input(y, h, [&*k1, &*k2, &*k3], &a[3]);
-        eval(sys, ev, t + T::c(c[3]) * h, &yt, k4)?;
+        eval(sys, ev, true, t + T::c(c[3]) * h, &yt, k4)?;
         let yt = stage_input(y, h, [&*k1, &*k2, &*k3, &*k4], &a[4]);
-        eval(sys, ev, t + T::c(c[4]) * h, &yt, k5)?;
+        eval(sys, ev, true, t + T::c(c[4]) * h, &yt, k5)?;
         let yt = stage_input(y, h, [&*k1, &*k2, &*k3, &*k4, &*k5], &a[5]);
-        eval(sys, ev, t1, &yt, k6)?;
+        eval(sys, ev, true, t1, &yt, k6)?;
         tr.y1 = stage_input(y, h, [&*k1, &*k2, &*k3, &*k4, &*k5, &*k6], &Tableau::B5);
-        eval(sys, ev, t1, &tr.y1, k7)?;
+        eval(sys, ev, false, t1, &tr.y1, k7)?;
         tr.err = lin(
             [&*k1, &*k2, &*k3, &*k4, &*k5, &*k6, &*k7],
             row::<T>(&Tableau::E),

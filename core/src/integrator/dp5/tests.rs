@@ -498,3 +498,48 @@ fn max_norm_propagates_non_finite() {
         f64::INFINITY
     );
 }
+
+/// `y' = λ y`, recording each evaluation's `(t, y, inner)`, `inner` as
+/// [`OdeSystem::inner_stage`] last said.
+struct Staged {
+    inner: bool,
+    seen: std::vec::Vec<(f64, f64, bool)>,
+}
+
+impl OdeSystem<f64, 1> for Staged {
+    type Error = Infallible;
+    fn eval(&mut self, t: f64, y: &Vector1<f64>, dy: &mut Vector1<f64>) -> Result<(), Infallible> {
+        self.seen.push((t, y[0], self.inner));
+        dy[0] = -2.0 * y[0];
+        Ok(())
+    }
+    fn inner_stage(&mut self, inner: bool) {
+        self.inner = inner;
+    }
+}
+
+/// Every evaluation of a step is an inner stage but the last, `f(t1, y1)`: the one at
+/// the state the step ends at (the step's returned `t` and `y`, to the bit), whose
+/// evaluation a caller reads after the step (FSAL). The stage before it, at `t1` too,
+/// is at another state and is inner. With the first stage reused (FSAL) or evaluated,
+/// alike.
+#[test]
+fn only_the_last_stage_is_the_steps_end() {
+    let mut sys = Staged {
+        inner: false,
+        seen: std::vec::Vec::new(),
+    };
+    let mut dp = Dp5::<f64, 1>::new();
+    let (mut t, mut y) = (0.0, Vector1::new(1.0));
+    for evals in [7, 6, 6] {
+        sys.seen.clear();
+        dp.step(&mut sys, &mut t, &mut y, 0.1).unwrap();
+        assert_eq!(sys.seen.len(), evals);
+        let (last, inner) = sys.seen.split_last().unwrap();
+        assert_eq!(*last, (t, y[0], false));
+        assert!(inner.iter().all(|s| s.2), "{inner:?}");
+        let (t6, y6, _) = inner[inner.len() - 1];
+        assert_eq!(t6, t);
+        assert_ne!(y6, y[0]);
+    }
+}

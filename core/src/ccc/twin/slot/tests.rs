@@ -186,3 +186,109 @@ fn a_restored_warm_start_reproduces_the_evaluations_bits() {
         assert_eq!(g.x, *x);
     }
 }
+
+/// An evaluation with the dyads' angles left stale ([`Angles::Stale`], the DP5 stages
+/// before a step's end) gives the recorded evaluation's bits in every position, cosine
+/// and sine, speed, acceleration and rate at the state (the oracle: the same state
+/// evaluated with the angles recorded), and the dyads' links keep the angles of the
+/// last recorded evaluation (a state 0.002 rad on: they differ). The coordinates'
+/// links' angles are the state's. A motor law of the crank's angle gets the angles
+/// recorded anyway. In A68 with the lever as coordinate and I0 (dyads only).
+#[test]
+fn stale_angles_change_nothing_but_the_angles() {
+    use super::super::inputs::{Inputs, MotorInput};
+    use super::Angles;
+    use crate::ccc::mode::Coordinates;
+    use crate::motor::Motor;
+    let p = CccParams::<f64>::reference();
+    let constant = Inputs {
+        motor: MotorInput::Law(Motor::Constant(12.0)),
+        load: 30.0,
+        measured: None,
+    };
+    let of_angle = Inputs {
+        motor: MotorInput::Law(Motor::User(|_, theta: f64, _| 12.0 + theta.sin())),
+        ..constant
+    };
+    let bits = |v: f64| v.to_bits();
+    let motion = |slot: &Slot<f64>| {
+        let mut m: std::vec::Vec<u64> = std::vec::Vec::new();
+        for b in slot.ws.body.iter() {
+            for v in [
+                b.c, b.s, b.o.x, b.o.y, b.omega, b.v.x, b.v.y, b.alpha, b.a.x, b.a.y,
+            ] {
+                m.push(bits(v));
+            }
+        }
+        m.extend(slot.ws.qdd.iter().map(|v| bits(*v)));
+        m
+    };
+    let angles = |slot: &Slot<f64>| slot.ws.body.map(|b| b.theta);
+    let mut slot = Slot::empty();
+    let mut stale_links = 0;
+    for (mode, coords) in [
+        (Mode::A68, Coordinates::Lever),
+        (Mode::I0, Coordinates::CrankSwing),
+    ] {
+        // A pose where the choice is conditioned (0.3 at least: far from its dead
+        // points, so the states 0.002 rad on assemble).
+        let (pose, q) = [30.0f64, 60.0, 150.0, 200.0, 250.0, 300.0]
+            .iter()
+            .find_map(|deg| {
+                let pose = initial_pose(&p, deg.to_radians(), 70f64.to_radians())?;
+                let q = slot.rebuild(&p, mode, coords, &pose, 0.0).ok()?;
+                (slot.conditioning() >= 0.3).then_some((pose, q))
+            })
+            .expect("a conditioned pose");
+        slot.rebuild(&p, mode, coords, &pose, 0.0).unwrap();
+        let n = slot.map.dof;
+        let state = |dq: f64| {
+            let mut y = SVector::<f64, STATE>::zeros();
+            for k in 0..n {
+                y[k] = q[k] + dq;
+                y[2 + k] = 5.0 - 3.0 * k as f64;
+            }
+            y
+        };
+        let eval = |slot: &mut Slot<f64>, dq: f64, inputs: &Inputs<f64>, a: Angles| {
+            slot.eval_with(0.0, &state(dq), inputs, (1.0, None, 0.0), a)
+                .unwrap();
+        };
+        eval(&mut slot, -0.002, &constant, Angles::Record);
+        let (recorded, recorded_angles) = (motion(&slot), angles(&slot));
+        eval(&mut slot, 0.0, &constant, Angles::Record);
+        let before = angles(&slot);
+        eval(&mut slot, -0.002, &constant, Angles::Stale);
+        assert_eq!(motion(&slot), recorded, "{mode}");
+        let coordinate_links: std::vec::Vec<usize> = (0..n)
+            .map(|k| slot.map.coord_link[k] as usize)
+            .map(|l| slot.body(l) as usize)
+            .collect();
+        for (b, (now, (rec, old))) in angles(&slot)
+            .iter()
+            .zip(recorded_angles.iter().zip(before.iter()))
+            .enumerate()
+            .skip(1)
+            .take(slot.model.links().len())
+        {
+            if coordinate_links.contains(&b) {
+                assert_eq!(bits(*now), bits(*rec), "{mode}: body {b}, a coordinate's");
+            } else {
+                assert_eq!(bits(*now), bits(*old), "{mode}: body {b} kept");
+                assert_ne!(bits(*now), bits(*rec), "{mode}: body {b} moved");
+                stale_links += 1;
+            }
+        }
+        eval(&mut slot, 0.0, &of_angle, Angles::Record);
+        eval(&mut slot, -0.002, &of_angle, Angles::Record);
+        let with_law = angles(&slot).map(bits);
+        eval(&mut slot, 0.0, &of_angle, Angles::Record);
+        eval(&mut slot, -0.002, &of_angle, Angles::Stale);
+        assert_eq!(
+            angles(&slot).map(bits),
+            with_law,
+            "{mode}: a law of the angle"
+        );
+    }
+    assert!(stale_links >= 8, "{stale_links}");
+}
