@@ -50,29 +50,6 @@ fn solve_group<T: Real, C: Capacity<T>>(
     bodies: &mut [BodyState<T>],
     q: &[T],
     qd: &[T],
-) -> Result<T, GroupFault> {
-    solve_group_as(g, gd, model, bodies, q, qd, Angles::Record)
-}
-
-/// [`solve_group`] with the links' angles left stale ([`Angles::Stale`]).
-fn solve_group_stale<T: Real, C: Capacity<T>>(
-    g: &Group<T>,
-    gd: &mut GroupData<T>,
-    model: &Model<T, C>,
-    bodies: &mut [BodyState<T>],
-    q: &[T],
-    qd: &[T],
-) -> Result<T, GroupFault> {
-    solve_group_as(g, gd, model, bodies, q, qd, Angles::Stale)
-}
-
-fn solve_group_as<T: Real, C: Capacity<T>>(
-    g: &Group<T>,
-    gd: &mut GroupData<T>,
-    model: &Model<T, C>,
-    bodies: &mut [BodyState<T>],
-    q: &[T],
-    qd: &[T],
     angles: Angles,
 ) -> Result<T, GroupFault> {
     match g.kind {
@@ -100,7 +77,7 @@ pub fn position<T: Real, C: Capacity<T>>(
     q: &[T],
     time: f64,
 ) -> Result<(), StepError> {
-    position_by(model, ws, q, time, solve_group)
+    position_with(model, ws, q, time, Angles::Record)
 }
 
 /// [`position`], the dyads' angles recorded or left stale (`angles`, see [`Angles`]).
@@ -111,10 +88,7 @@ pub fn position_with<T: Real, C: Capacity<T>>(
     time: f64,
     angles: Angles,
 ) -> Result<(), StepError> {
-    match angles {
-        Angles::Record => position_by(model, ws, q, time, solve_group),
-        Angles::Stale => position_by(model, ws, q, time, solve_group_stale),
-    }
+    position_by(model, ws, q, time, solve_group, angles)
 }
 
 /// A group's position solver: closed form where there is one, or Newton-Raphson.
@@ -126,6 +100,7 @@ type Solver<T, C> = fn(
     &mut [BodyState<T>],
     &[T],
     &[T],
+    Angles,
 ) -> Result<T, GroupFault>;
 
 /// The position pass with a given group solver.
@@ -135,6 +110,7 @@ fn position_by<T: Real, C: Capacity<T>>(
     q: &[T],
     time: f64,
     solve: Solver<T, C>,
+    angles: Angles,
 ) -> Result<(), StepError> {
     if q.iter().any(|v| !v.finite()) {
         return Err(StepError::NonFinite {
@@ -151,7 +127,7 @@ fn position_by<T: Real, C: Capacity<T>>(
         body, group, qd, ..
     } = ws;
     for (i, (g, gd)) in model.groups().iter().zip(group.iter_mut()).enumerate() {
-        let det = solve(g, gd, model, body, q, qd).map_err(|f| fail(g, i, time, f))?;
+        let det = solve(g, gd, model, body, q, qd, angles).map_err(|f| fail(g, i, time, f))?;
         if !g.has_closed_form() && det * gd.det_sign < T::zero() {
             return Err(fail(g, i, time, GroupFault::BranchJump));
         }
@@ -310,7 +286,7 @@ fn assemble_by<T: Real, C: Capacity<T>>(
                     if let Some((_, _, placed)) = best.as_mut() {
                         *placed = false;
                     }
-                    match solve_group(g, &mut trial, model, body, q, &[]) {
+                    match solve_group(g, &mut trial, model, body, q, &[], Angles::Record) {
                         Ok(_) => {
                             let d = distance(g, &trial, body);
                             if best.as_ref().is_none_or(|(bd, _, _)| d < *bd) {
@@ -328,12 +304,13 @@ fn assemble_by<T: Real, C: Capacity<T>>(
                 // after it (a closed form's solve is a function of its inputs: placing
                 // again would give the same bits).
                 if !placed {
-                    solve_group(g, gd, model, body, q, &[]).map_err(|f| fail(g, i, 0.0, f))?;
+                    solve_group(g, gd, model, body, q, &[], Angles::Record)
+                        .map_err(|f| fail(g, i, 0.0, f))?;
                 }
             }
             _ => {
-                let det =
-                    solve_group(g, gd, model, body, q, &[]).map_err(|f| fail(g, i, 0.0, f))?;
+                let det = solve_group(g, gd, model, body, q, &[], Angles::Record)
+                    .map_err(|f| fail(g, i, 0.0, f))?;
                 gd.det_sign = if det < T::zero() { -T::one() } else { T::one() };
             }
         }
@@ -359,5 +336,12 @@ pub fn position_newton<T: Real, C: Capacity<T>>(
     q: &[T],
     time: f64,
 ) -> Result<(), StepError> {
-    position_by(model, ws, q, time, newton::solve)
+    position_by(
+        model,
+        ws,
+        q,
+        time,
+        |g, gd, model, bodies, q, qd, _| newton::solve(g, gd, model, bodies, q, qd),
+        Angles::Record,
+    )
 }

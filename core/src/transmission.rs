@@ -97,7 +97,7 @@ pub fn evaluate_with<T: Real, C: Capacity<T>>(
     time: f64,
     angles: Angles,
 ) -> Result<(), StepError> {
-    evaluate_velocities_with(model, ws, q, qd, time, angles)?;
+    evaluate_velocities(model, ws, q, qd, time, angles)?;
     let zero = [T::zero(); MAX_DOF];
     acceleration(model, ws, qd, &zero);
     cog_accelerations(model, &ws.body, &mut ws.a_bias);
@@ -110,20 +110,9 @@ pub fn evaluate_with<T: Real, C: Capacity<T>>(
 /// The first half of [`evaluate`]: positions, `V`, `C` and the actual velocities of the
 /// bodies and groups, without the acceleration pass (the bodies' and groups'
 /// accelerations are left as they were). For what needs speeds only, e.g. locating an
-/// event whose function is a speed.
+/// event whose function is a speed. `angles`: the dyads' link angles recorded or left
+/// stale (see [`Angles`]).
 pub fn evaluate_velocities<T: Real, C: Capacity<T>>(
-    model: &Model<T, C>,
-    ws: &mut Workspace<T, C>,
-    q: &[T],
-    qd: &[T],
-    time: f64,
-) -> Result<(), StepError> {
-    evaluate_velocities_with(model, ws, q, qd, time, Angles::Record)
-}
-
-/// [`evaluate_velocities`], the dyads' angles recorded or left stale (`angles`, see
-/// [`Angles`]).
-pub fn evaluate_velocities_with<T: Real, C: Capacity<T>>(
     model: &Model<T, C>,
     ws: &mut Workspace<T, C>,
     q: &[T],

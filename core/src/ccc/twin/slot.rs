@@ -451,7 +451,7 @@ impl<T: Real> Slot<T> {
         let s = y.as_slice();
         let q = s.get(..n).unwrap_or(&[]);
         let qd = s.get(QD..QD + n).unwrap_or(&[]);
-        evaluate_velocities(&self.model, &mut self.ws, q, qd, t.to_f64())
+        evaluate_velocities(&self.model, &mut self.ws, q, qd, t.to_f64(), Angles::Record)
     }
 
     /// `dy` of the state after [`Slot::eval`]: `q̇`, `q̈`, motor power, load power (with
