@@ -23,6 +23,13 @@ impl<T: Real> MotorInput<T> {
             MotorInput::Law(m) => m.torque(t, theta, omega),
         }
     }
+
+    /// Whether the torque is a user's law ([`Motor::User`]): the one input that may
+    /// read the time and the crank's angle (the others: a held torque, a constant, a
+    /// characteristic of the speed).
+    pub fn is_user_law(&self) -> bool {
+        matches!(self, MotorInput::Law(Motor::User(_)))
+    }
 }
 
 /// What the twin is given each step.

@@ -59,7 +59,6 @@ use super::params::CccParams;
 use crate::dynamics::finish_accelerations;
 use crate::error::StepError;
 use crate::integrator::Dp5;
-use crate::motor::Motor;
 use crate::scalar::{Real, Vec2};
 use crate::workspace::WarmStart;
 use coast::{lever_driven, Coast};
@@ -360,8 +359,7 @@ impl<T: Real> Twin<T> {
         {
             return false;
         }
-        let of_time = |m: &MotorInput<T>| matches!(m, MotorInput::Law(Motor::User(_)));
-        if of_time(&self.inputs.motor) || of_time(&inputs.motor) {
+        if self.inputs.motor.is_user_law() || inputs.motor.is_user_law() {
             return false;
         }
         // Without a user law the torque is a function of the crank's speed alone.

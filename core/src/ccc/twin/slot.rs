@@ -8,7 +8,7 @@ use super::super::params::{CccParams, Friction, FRICTION_JOINTS};
 use super::capacity::Converter;
 use super::coast::Coast;
 use super::error::TwinStepError;
-use super::inputs::{Inputs, MotorInput};
+use super::inputs::Inputs;
 use crate::dynamics::solve_accelerations;
 use crate::error::{GroupId, StepError};
 use crate::in_place::uninit;
@@ -16,7 +16,6 @@ use crate::integrator::OdeSystem;
 use crate::kinematics::assemble;
 use crate::kinematics::{group_id, position};
 use crate::model::Model;
-use crate::motor::Motor;
 use crate::scalar::{cross, perp, rotate_cs, Real, Vec2};
 use crate::structomat::JointKind;
 use crate::structomat::{Angles, GroupKind};
@@ -340,9 +339,10 @@ impl<T: Real> Slot<T> {
         let s = y.as_slice();
         let q = s.get(..n).unwrap_or(&[]);
         let qd = s.get(QD..QD + n).unwrap_or(&[]);
-        let angles = match inputs.motor {
-            MotorInput::Law(Motor::User(_)) => Angles::Record,
-            _ => angles,
+        let angles = if inputs.motor.is_user_law() {
+            Angles::Record
+        } else {
+            angles
         };
         evaluate_with(&self.model, &mut self.ws, q, qd, t.to_f64(), angles)?;
         let crank = self
