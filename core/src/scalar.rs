@@ -14,6 +14,10 @@ pub trait Real: RealField + Copy + core::fmt::Debug + core::fmt::Display + Defau
     fn c(x: f64) -> Self;
     /// Widens to `f64` (exact for both implementations).
     fn to_f64(self) -> f64;
+    /// The IEEE 754 bit pattern, widened to 64 bits: two values have the same only if
+    /// they are the same bits (a -0 and a NaN's payload included). f32's own, not
+    /// through `to_f64`, which is a library's conversion on a single-precision FPU.
+    fn bits(self) -> u64;
     /// Machine epsilon of the type.
     const EPS: Self;
     /// `true` when the value is neither NaN nor infinite.
@@ -38,6 +42,10 @@ impl Real for f64 {
     #[inline(always)]
     fn to_f64(self) -> f64 {
         self
+    }
+    #[inline(always)]
+    fn bits(self) -> u64 {
+        self.to_bits()
     }
     const EPS: Self = f64::EPSILON;
     #[inline(always)]
@@ -81,6 +89,10 @@ impl Real for f32 {
     #[inline(always)]
     fn to_f64(self) -> f64 {
         self as f64
+    }
+    #[inline(always)]
+    fn bits(self) -> u64 {
+        u64::from(self.to_bits())
     }
     const EPS: Self = f32::EPSILON;
     #[inline(always)]
@@ -152,6 +164,12 @@ pub fn cross<T: Real>(a: &Vec2<T>, b: &Vec2<T>) -> T {
     a.x * b.y - a.y * b.x
 }
 
+/// Whether `a` and `b` are the same bits (see [`Real::bits`]): the test of a state or
+/// an input met again, where `==` would take -0 for 0 and never a NaN for itself.
+#[inline]
+pub fn same_bits<T: Real>(a: T, b: T) -> bool {
+    a.bits() == b.bits()
+}
 #[cfg(test)]
 mod tests {
     use super::Real;

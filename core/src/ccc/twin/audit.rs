@@ -122,14 +122,25 @@ impl<T: Real> Twin<T> {
 
     /// The audit at the end of the step in `w` and the physical links it is computed
     /// from (the state [`Twin::commit`] takes), or an error if its residual moved past
-    /// the tolerance over the step.
+    /// the tolerance over the step; `w.excess` is its jump over the tolerance either way.
     pub(super) fn check_energy(
         &self,
         w: &mut Work<T>,
     ) -> Result<(Audit<T>, [LinkState<T>; 9]), TwinStepError> {
         let links = self.slots.cur().links(&self.params);
         let a = self.balance_within(w, &links, T::one())?;
+        // Passed: the jump under its tolerance, for the step's rung prediction.
+        let (jump, tol) = self.jump_of(&a);
+        w.excess = Some(jump.abs() / tol);
         Ok((a, links))
+    }
+
+    /// The audit `a`'s residual's jump since the last committed state's (J) and the
+    /// energy tolerance at its scale (J).
+    fn jump_of(&self, a: &Audit<T>) -> (T, T) {
+        let jump = a.residual() - self.audit.residual();
+        let scale = T::one() + a.motor_work.abs() + a.kinetic.abs() + a.potential.abs();
+        (jump, self.settings.energy_tol * scale)
     }
 
     /// The audit at `w`'s state (the end of the step, or an event inside it) from the
@@ -144,9 +155,7 @@ impl<T: Real> Twin<T> {
     ) -> Result<Audit<T>, TwinStepError> {
         let a = self.audit_of(links, w);
         audit_finite(&a, w.t)?;
-        let jump = a.residual() - self.audit.residual();
-        let scale = T::one() + a.motor_work.abs() + a.kinetic.abs() + a.potential.abs();
-        let tol = self.settings.energy_tol * scale;
+        let (jump, tol) = self.jump_of(&a);
         if jump.abs() <= tol * margin {
             return Ok(a);
         }

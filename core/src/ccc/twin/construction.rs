@@ -12,6 +12,7 @@ use super::error::{TwinSetupError, TwinStepError};
 use super::evaluate::TorqueSource;
 use super::guards::{EventKind, Guards};
 use super::inputs::{check_inputs, Held, Inputs};
+use super::rungs::JumpHistory;
 use super::settings::{check_settings, TwinSettings};
 use super::slot::{LinkState, Slot};
 use super::slots::Slots;
@@ -74,6 +75,7 @@ impl<T: Real> Twin<T> {
             candidates: heapless::Vec::new(),
             torque_source: TorqueSource::Kinetostatics,
             at_rest: false,
+            jumps: JumpHistory::NONE,
         };
         twin.start_at(&q, &pose, &inputs)?;
         Ok(twin)
@@ -162,6 +164,7 @@ impl<T: Real> Twin<T> {
             addr_of_mut!((*p).candidates).write(heapless::Vec::new());
             addr_of_mut!((*p).torque_source).write(TorqueSource::Kinetostatics);
             addr_of_mut!((*p).at_rest).write(false);
+            addr_of_mut!((*p).jumps).write(JumpHistory::NONE);
             place.assume_init_mut()
         }
     }
@@ -266,5 +269,6 @@ fn fields_of<T: Real>(t: &Twin<T>) {
         torque_source: _,
         at_rest: _,
         lossy: _,
+        jumps: _,
     } = t;
 }

@@ -13,7 +13,8 @@
 //! switching (`coordinates.rs`); a correction of the state in crank terms, an
 //! observer's update (`correction.rs`); one mode's model and workspace (`slot.rs`), the three
 //! working slots (`slots.rs`) and their staged evaluation (`evaluate.rs`); the energy
-//! audit (`audit.rs`).
+//! audit (`audit.rs`) and the sub-steps a step takes when it breaks the balance
+//! (`rungs.rs`).
 //!
 //! The twin's contract (bounded work, no allocation, size, step sizes, placement in
 //! firmware) is on [`Twin`].
@@ -36,6 +37,7 @@ mod inputs;
 mod locate;
 mod mass;
 mod outputs;
+mod rungs;
 mod settings;
 mod slot;
 mod slots;
@@ -59,14 +61,15 @@ use super::params::CccParams;
 use crate::dynamics::finish_accelerations;
 use crate::error::StepError;
 use crate::integrator::Dp5;
-use crate::scalar::{Real, Vec2};
+use crate::scalar::{same_bits, Real, Vec2};
 use crate::workspace::WarmStart;
 use coast::{lever_driven, Coast};
 use evaluate::{Stage, TorqueSource, Torques};
 use guards::{Guard, Guards};
 use inputs::{check_inputs, same_inputs, Held};
 use nalgebra::SVector;
-use settings::{EARLY_AUDIT_MARGIN, RETRY_SUBSTEPS, RUNG_SAFETY};
+use rungs::{rung_may_pass, JumpHistory};
+use settings::{EARLY_AUDIT_MARGIN, RETRY_SUBSTEPS};
 use slot::{unwrap_near, Equations, Slot, QD, STATE};
 use slots::Slots;
 
@@ -76,8 +79,9 @@ use slots::Slots;
 /// # Contract
 ///
 /// **Bounded work per step.** A step is at most 5 attempts (1, 2, 3, 4 and 16 DP5 steps
-/// between events, 2 and 3 only when the energy check predicts they pass: 26 steps' work in
-/// all; [`SUBSTEPS`] are the core's rungs), each with at most
+/// between events, 2 and 3 only when the energy check predicts they pass, and the
+/// rungs below 3 or finer skipped when the last steps' energy jumps predict that they
+/// fail: 26 steps' work in all; [`SUBSTEPS`] are the core's rungs), each with at most
 /// [`MAX_EVENTS_PER_STEP`] events, each located in at most [`MAX_LOCATE_ITER`]
 /// evaluations and settled by at most 7 candidate modes of at most 3 coordinate choices
 /// each, and at most [`MAX_RETRIES`] coordinate switches after a failed sub-step. Every
@@ -92,12 +96,12 @@ use slots::Slots;
 /// a step); no indexing on the step path can panic, and a failed step returns an error
 /// and keeps the last good state.
 ///
-/// **Size.** `size_of::<Twin<f64>>()` is 63 576 B (62.1 KiB), `Twin<f32>` 32 760 B
+/// **Size.** `size_of::<Twin<f64>>()` is 63 576 B (62.1 KiB), `Twin<f32>` 32 768 B
 /// (32.0 KiB) on x86_64: three slots, each a model and a workspace sized for the
 /// converter; the mode choice builds its reference model in the one it leaves free
 /// (the core asserts the budgets at compile time: 64 KiB and 32 KiB). A step's
 /// stack high-water is about 14 KiB in f64 and 8.5 KiB in f32 on x86_64 (S2, events
-/// included), 12.5 and 8.1 KiB painted on the Cortex-M boards.
+/// included), 12.6 and 8.2 KiB painted on the Cortex-M boards.
 ///
 /// **Step sizes.** h = 1e-4 s is the reference in f64 (S2's events within 1e-6 s of
 /// h = 5e-5 s); h = 2e-4 s is the recommended f32 step (the largest with no step
@@ -220,6 +224,9 @@ pub struct Twin<T: Real> {
     /// Any of the losses of `params.friction` is on (`Friction::active`, taken once):
     /// without, the equations skip every friction term.
     lossy: bool,
+    /// The last two steps' energy jumps, from which the next step's first rung is
+    /// predicted ([`JumpHistory::start_rung`]).
+    jumps: JumpHistory,
 }
 
 /// The working state of a step, committed only when the whole step succeeds.
@@ -251,8 +258,10 @@ struct Work<T: Real> {
     /// The step ended in the rest branch of [`Twin::advance`] (its last evaluation the
     /// full one of the state at rest, at the step's end).
     at_rest: bool,
-    /// The energy check that failed the attempt: its residual's jump over its
-    /// tolerance (over 1), from which [`rung_may_pass`] predicts the next rung.
+    /// The last energy check's jump over its tolerance: the one that failed the
+    /// attempt (over 1), from which [`rung_may_pass`] predicts the next rung, or the
+    /// step's end's that passed, from which the next step's first rung is predicted
+    /// ([`JumpHistory`]).
     excess: Option<T>,
 }
 
@@ -260,23 +269,6 @@ struct Work<T: Real> {
 /// fraction of the step: 17 times the dense output's largest error in S2's crossing
 /// times at h = 1 ms (5.7e-6).
 const NUDGE_MAX: f64 = 1e-4;
-
-/// Whether a retry in `n` sub-steps is worth trying after an attempt in `done` failed,
-/// its energy jump `excess` times its tolerance (`None`: it failed otherwise). DP5's
-/// energy error per step is O(h⁶), so `n` sub-steps where there were `done` divide an
-/// undivided jump by about `(n/done)⁵`. The rungs of the core's [`SUBSTEPS`] are
-/// always tried (a mechanism failure, or a prediction that fails, goes on to them);
-/// the twin's extra rungs (2 and 3) only when predicted to pass by a factor
-/// [`RUNG_SAFETY`]. S2 at h = 1 ms: the catch I6 -> A68 at 0.0666 s broke the balance
-/// by 9.9 undivided, where 4 sub-steps had redone it (706k Thumb-2 instructions on the
-/// Cortex-M7 in f64).
-fn rung_may_pass<T: Real>(n: u32, done: u32, excess: Option<T>) -> bool {
-    if SUBSTEPS.contains(&n) {
-        return true;
-    }
-    let r = f64::from(n) / f64::from(done.max(1));
-    excess.is_some_and(|e| e.to_f64() * RUNG_SAFETY <= r * r * r * r * r)
-}
 
 impl<T: Real> Twin<T> {
     /// One step of `h` under `inputs` (held over the step). On error the twin keeps the
@@ -300,29 +292,17 @@ impl<T: Real> Twin<T> {
             (!self.switches.is_empty()).then(|| self.switches.clone()),
             self.candidates.clone(),
         );
-        let [first, finer @ ..] = RETRY_SUBSTEPS;
-        // How far the last failed attempt's energy balance broke (see `Work::excess`).
+        let start = self.jumps.start_rung();
+        // How far the attempt's energy balance broke (see `Work::excess`).
         let mut excess = None;
-        let mut result = self.attempt(inputs, changed, changed, first, &saved, &mut excess);
-        let mut done = first;
-        for substeps in finer {
-            match &result {
-                Err(e) if e.retry_finer() => {}
-                _ => break,
-            }
-            if !rung_may_pass(substeps, done, excess) {
-                continue;
-            }
-            crate::trace::debug!(
-                "t = {:.6} s: the step redone in {substeps} sub-steps (energy jump {excess:?} of its tolerance)",
-                self.t.to_f64()
-            );
-            // The failed attempt's restore seeded the first stage (see `attempt`): a
-            // retry takes 1 evaluation fewer (8k Thumb-2 instructions on the M7 in A68).
-            result = self.attempt(inputs, changed, changed, substeps, &saved, &mut excess);
-            done = substeps;
+        let mut result = self.attempt(inputs, changed, changed, start, &saved, &mut excess);
+        let first_jump = excess;
+        if matches!(&result, Err(e) if e.retry_finer()) {
+            result = self.climb(inputs, changed, result, (start, excess), &saved);
         }
         let Err(failure) = result else {
+            let eventful = !(self.events.is_empty() && self.switches.is_empty());
+            self.jumps = self.jumps.after(start, first_jump, eventful);
             return Ok(());
         };
         let (events, switches, candidates) = log;
@@ -344,6 +324,40 @@ impl<T: Real> Twin<T> {
             }
         }
         Err(failure)
+    }
+
+    /// The step redone on the finer rungs after its attempt in `done` sub-steps failed
+    /// (`failed`), its energy jump `excess` (see [`rung_may_pass`]), until one passes or
+    /// fails otherwise: that attempt's result (`failed` if no rung is left). Not inlined: the rungs' arithmetic (f64's, a
+    /// library's on the M4F) stays off the path of a step that passes.
+    #[inline(never)]
+    fn climb(
+        &mut self,
+        inputs: &Inputs<T>,
+        changed: bool,
+        failed: Result<(), TwinStepError>,
+        (mut done, mut excess): (u32, Option<T>),
+        saved: &WarmStart<T>,
+    ) -> Result<(), TwinStepError> {
+        let mut result = failed;
+        for substeps in RETRY_SUBSTEPS {
+            if substeps <= done || !rung_may_pass(substeps, done, excess) {
+                continue;
+            }
+            crate::trace::debug!(
+                "t = {:.6} s: the step redone in {substeps} sub-steps (energy jump {excess:?} of its tolerance)",
+                self.t.to_f64()
+            );
+            // The failed attempt's restore seeded the first stage (see `attempt`): a
+            // retry takes 1 evaluation fewer (8k Thumb-2 instructions on the M7 in A68).
+            result = self.attempt(inputs, changed, changed, substeps, saved, &mut excess);
+            done = substeps;
+            match &result {
+                Err(e) if e.retry_finer() => {}
+                _ => break,
+            }
+        }
+        result
     }
 
     /// Whether a step under `inputs` can only repeat the last one at rest: that step
@@ -464,7 +478,11 @@ impl<T: Real> Twin<T> {
         substeps: u32,
     ) -> Result<(), TwinStepError> {
         let t_end = self.step_end()?;
-        let h_max = self.settings.h / T::c(substeps as f64);
+        // Undivided without a conversion of `substeps` (f64's, a library's on the M4F).
+        let h_max = match substeps {
+            1 => self.settings.h,
+            n => self.settings.h / T::c(f64::from(n)),
+        };
         if changed {
             self.new_inputs(w, inputs)?;
         }
@@ -888,10 +906,6 @@ fn shaft_accel<T: Real>(mode: Mode, links: &[LinkState<T>; 9]) -> T {
         [Clutch::Engaged, _] => links[6].alpha,
         _ => links[8].alpha,
     }
-}
-
-fn same_bits<T: Real>(a: T, b: T) -> bool {
-    a.to_f64().to_bits() == b.to_f64().to_bits()
 }
 
 #[cfg(test)]

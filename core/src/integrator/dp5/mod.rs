@@ -11,7 +11,7 @@
 //! stage and the dense output of the previous step as they were.
 
 use super::{OdeSystem, Tableau};
-use crate::scalar::Real;
+use crate::scalar::{same_bits, Real};
 use nalgebra::SVector;
 
 /// What one DP5 step reports.
@@ -124,11 +124,6 @@ pub(super) fn max_norm<T: Real, const N: usize>(v: &SVector<T, N>) -> T {
         }
     }
     m
-}
-
-/// Bitwise equality of two scalars (widening to `f64` is exact and injective).
-fn same_bits<T: Real>(a: T, b: T) -> bool {
-    a.to_f64().to_bits() == b.to_f64().to_bits()
 }
 
 /// Counts and performs one evaluation of `sys`, an inner stage (`inner`: every stage

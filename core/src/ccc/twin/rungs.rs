@@ -1,0 +1,227 @@
+//! The sub-step ladder: which rungs ([`RETRY_SUBSTEPS`]: a step's DP5 steps) a step
+//! tries when its energy balance breaks, and which one it starts from.
+//!
+//! DP5's energy error per step is O(h⁶): an attempt in `n` sub-steps breaks the balance
+//! by about `(1/n)⁵` of an undivided one, its rung-1 equivalent `jump · n⁵` (the jump
+//! in tolerances). Two predictions follow. After a failed attempt, a finer rung is
+//! tried only if its jump is predicted to pass ([`rung_may_pass`]). And where the
+//! balance breaks by more step after step, as the motion quickens towards an event,
+//! the next step's rung-1 jump is extrapolated from the last two steps'
+//! ([`JumpHistory::start_rung`]): a step predicted to fail rung 1 and rung 2 starts
+//! at the rung predicted to pass, and the attempts below it, each a DP5 step's work
+//! only to fail, are not made. S2 in f64 at h = 1 ms: the release of lever 8 at
+//! 0.2629 s broke the balance by 2.97, 20.7 and 242 tolerances in three steps; the
+//! third now starts at 4 sub-steps, 1 attempt instead of 2 (on the Cortex-M7 in f64,
+//! 371k → 307k Thumb-2 instructions: it was S2's worst step).
+
+use super::settings::{RETRY_SUBSTEPS, RUNG_SAFETY, SUBSTEPS};
+use crate::scalar::Real;
+
+/// The rung a step may start from at least: a start at rung 2 would save one DP5
+/// step where the prediction holds and cost one where it does not (an undivided step
+/// that would have passed), and the trend is rough (S2's jumps change by factors of 0.2
+/// to 11 from step to step); a start at 3 or finer is predicted to skip two rungs that
+/// fail by `RUNG_SAFETY` at least.
+const START_RUNG_MIN: u32 = 3;
+
+/// `n⁵`, the factor by which `n` sub-steps divide an undivided step's energy jump.
+fn fifth(n: u32) -> f64 {
+    let n = f64::from(n);
+    n * n * n * n * n
+}
+
+/// Whether a retry in `n` sub-steps is worth trying after an attempt in `done` failed,
+/// its energy jump `excess` times its tolerance (`None`: it failed otherwise): `n`
+/// sub-steps where there were `done` divide the jump by about `(n/done)⁵`. The rungs
+/// of the core's [`SUBSTEPS`] are always tried (a mechanism failure, or a prediction
+/// that fails, goes on to them); the twin's extra rungs (2 and 3) only when predicted
+/// to pass by a factor [`RUNG_SAFETY`]. S2 at h = 1 ms: the catch I6 -> A68 at 0.0666 s
+/// broke the balance by 9.9 undivided, where 4 sub-steps had redone it (706k Thumb-2
+/// instructions on the Cortex-M7 in f64).
+pub(super) fn rung_may_pass<T: Real>(n: u32, done: u32, excess: Option<T>) -> bool {
+    if SUBSTEPS.contains(&n) {
+        return true;
+    }
+    let r = f64::from(n) / f64::from(done.max(1));
+    excess.is_some_and(|e| e.to_f64() * RUNG_SAFETY <= r * r * r * r * r)
+}
+
+/// The rung-1 energy jumps (tolerances) of the last two steps, oldest first, each a
+/// bfloat16 (the high half of an `f32`'s bits; 0: none). A step records its first
+/// attempt's jump times that attempt's `n⁵` if it is at least 1 (the undivided step
+/// would have failed), and none if it had an event or a coordinate switch (the motion
+/// after it is another's: S2's release at 0.2629 s broke by 242 and the step after it by
+/// 3.8). Two bytes each: the f32 twin has 8 bytes left under its 32 KiB, and a trend
+/// needs no more than 3 digits.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub(super) struct JumpHistory([u16; 2]);
+
+impl JumpHistory {
+    /// No history: the next step starts at rung 1.
+    pub const NONE: Self = JumpHistory([0; 2]);
+
+    /// The history after a step whose first attempt, in `start` sub-steps, broke the
+    /// balance by `jump` tolerances (`None`: not measured); `eventful`: the step had an
+    /// event or a coordinate switch.
+    pub fn after<T: Real>(self, start: u32, jump: Option<T>, eventful: bool) -> Self {
+        if eventful {
+            return Self::NONE;
+        }
+        let code = match jump {
+            // Compared in `T` where the attempt was undivided (most steps pass it: f64
+            // arithmetic is a library's on the M4F).
+            Some(j) if start == 1 && !(j >= T::one()) => 0,
+            Some(j) => bfloat16_at_least_1(j.to_f64() * fifth(start)),
+            None => 0,
+        };
+        let [_, last] = self.0;
+        JumpHistory([last, code])
+    }
+
+    /// The rung the next step starts from: the coarsest of [`RETRY_SUBSTEPS`] at which
+    /// the last two jumps' geometric trend, `j₁ · (j₁ / j₀)`, is predicted to pass by
+    /// [`RUNG_SAFETY`] (the finest if none), if it is [`START_RUNG_MIN`] or finer; else
+    /// rung 1.
+    pub fn start_rung(self) -> u32 {
+        let [first, ..] = RETRY_SUBSTEPS;
+        if self.0.contains(&0) {
+            return first;
+        }
+        let decode = |c: u16| f64::from(f32::from_bits(u32::from(c) << 16));
+        let [j0, j1] = self.0.map(decode);
+        let predicted = j1 * (j1 / j0);
+        let fine = RETRY_SUBSTEPS.last().copied().unwrap_or(first);
+        let n = RETRY_SUBSTEPS
+            .iter()
+            .copied()
+            .find(|n| predicted * RUNG_SAFETY <= fifth(*n))
+            .unwrap_or(fine);
+        if n >= START_RUNG_MIN {
+            n
+        } else {
+            first
+        }
+    }
+}
+
+/// `x` as a bfloat16 (rounded to nearest, ties away) if it is at least 1, else 0.
+fn bfloat16_at_least_1(x: f64) -> u16 {
+    if x >= 1.0 {
+        ((x as f32).to_bits().saturating_add(0x8000) >> 16) as u16
+    } else {
+        0
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{fifth, rung_may_pass, JumpHistory, RETRY_SUBSTEPS, RUNG_SAFETY};
+
+    /// The history after the steps whose undivided jumps are `jumps`.
+    fn after(jumps: &[f64]) -> JumpHistory {
+        jumps
+            .iter()
+            .fold(JumpHistory::NONE, |h, j| h.after(1, Some(*j), false))
+    }
+
+    #[test]
+    fn a_quickening_jump_starts_the_next_step_where_it_is_predicted_to_pass() {
+        // S2 in f64 at h = 1 ms before the release at 0.2629 s: 2.97 then 20.7; the
+        // trend predicts 144, which passes in 4 sub-steps by 1024/144 = 7.1 (3: 243/144
+        // = 1.7, under RUNG_SAFETY). The step broke by 242 undivided: 4 sub-steps was
+        // its rung.
+        assert_eq!(after(&[2.97, 20.7]).start_rung(), 4);
+        // Past 4 sub-steps' reach: the finest.
+        assert_eq!(after(&[2.0, 400.0]).start_rung(), 16);
+        // 7.1 → 25.2 predicts 89, under 243/2: 3 sub-steps.
+        assert_eq!(after(&[7.1, 25.2]).start_rung(), 3);
+    }
+
+    #[test]
+    fn a_rung_under_three_or_no_trend_starts_at_one() {
+        // Predicted 12.9: rung 2 passes (32/12.9 = 2.5), a start at 2 is not made.
+        assert_eq!(after(&[2.0, 5.08]).start_rung(), 1);
+        // A falling trend: 33.6 → 5.65 predicts 0.95.
+        assert_eq!(after(&[33.6, 5.65]).start_rung(), 1);
+        // One step's jump alone is no trend.
+        assert_eq!(after(&[300.0]).start_rung(), 1);
+        // A step that passed undivided (under 1) breaks the trend.
+        assert_eq!(after(&[20.0, 300.0, 0.5]).start_rung(), 1);
+        assert_eq!(after(&[20.0, 0.5, 300.0]).start_rung(), 1);
+        // An event or a coordinate switch clears it.
+        let h = after(&[20.0, 300.0]).after(1, Some(500.0), true);
+        assert_eq!(h, JumpHistory::NONE);
+        assert_eq!(h.start_rung(), 1);
+        assert_eq!(JumpHistory::NONE.start_rung(), 1);
+    }
+
+    #[test]
+    fn a_divided_first_attempt_counts_as_its_undivided_jump() {
+        // A step started at 4 sub-steps that broke by 0.1 of its tolerance is a rung-1
+        // jump of 102.4: after 20, the trend predicts 524 (4 sub-steps pass by 1.95,
+        // under RUNG_SAFETY: 16).
+        let h = after(&[20.0]).after(4, Some(0.1f64), false);
+        assert_eq!(h.start_rung(), 16);
+        // Under 1 undivided: none.
+        let h = after(&[20.0]).after(2, Some(0.02f64), false);
+        assert_eq!(h.start_rung(), 1);
+        // Not measured: none.
+        let h = after(&[20.0, 300.0]).after::<f64>(1, None, false);
+        assert_eq!(h.start_rung(), 1);
+    }
+
+    #[test]
+    fn the_code_keeps_three_digits() {
+        for j in [1.0, 2.97, 20.7, 241.75, 8185.2, 1e30] {
+            let h = after(&[1.0, j]);
+            let got = f64::from(f32::from_bits(u32::from(h.0[1]) << 16));
+            assert!((got - j).abs() <= j * 2f64.powi(-8), "{j} coded as {got}");
+        }
+        // The start rung from coded values agrees with the exact trend's wherever the
+        // exact prediction is not within the code's error of a rung's threshold.
+        for (a, b) in [(1.5, 9.0), (3.0, 40.0), (10.0, 100.0), (50.0, 60.0)] {
+            let exact = b * b / a;
+            let n = RETRY_SUBSTEPS
+                .iter()
+                .copied()
+                .find(|n| exact * RUNG_SAFETY <= fifth(*n))
+                .unwrap_or(16);
+            let n = if n >= 3 { n } else { 1 };
+            assert_eq!(after(&[a, b]).start_rung(), n, "{a} -> {b}");
+        }
+    }
+
+    /// The rungs after a failed attempt: the core's (4 and 16) always; 2 and 3 only where
+    /// DP5's O(h⁶) energy error per step, divided into `n` where there were `done`, brings
+    /// the jump under the tolerance by the safety factor 2: a jump of `e` tolerances
+    /// becomes e·(done/n)⁵, so 3 after 1 passes for e ≤ 3⁵/2 = 121.5 and 2 after 1 for
+    /// e ≤ 2⁵/2 = 16 (S2 in f64 at h = 1 ms: 70.2 at its catch I0 -> A8 at 0.1763 s, which
+    /// 3 sub-steps then passed; 135 at the release at 0.2629 s, which goes to 4).
+    #[test]
+    fn the_rungs_are_tried_where_the_h6_law_predicts_they_pass() {
+        use super::SUBSTEPS;
+        assert_eq!(RUNG_SAFETY, 2.0);
+        // The core's rungs are all the twin's, in the same order, with 2 and 3 before 4.
+        assert_eq!(RETRY_SUBSTEPS, [1, 2, 3, 4, 16]);
+        assert!(SUBSTEPS.iter().all(|n| RETRY_SUBSTEPS.contains(n)));
+        for n in SUBSTEPS {
+            assert!(rung_may_pass::<f64>(n, 1, None), "{n}");
+            assert!(rung_may_pass::<f64>(n, 3, Some(1e6)), "{n}");
+        }
+        // 3 after 1: 243 / 2 = 121.5 tolerances.
+        assert!(rung_may_pass(3, 1, Some(70.2f64)));
+        assert!(rung_may_pass(3, 1, Some(121.5f64)));
+        assert!(!rung_may_pass(3, 1, Some(121.6f64)));
+        assert!(!rung_may_pass(3, 1, Some(135.0f64)));
+        // 2 after 1: 32 / 2 = 16.
+        assert!(rung_may_pass(2, 1, Some(16.0f64)));
+        assert!(!rung_may_pass(2, 1, Some(16.1f64)));
+        // 3 after 2: 1.5⁵ / 2 = 3.796875.
+        assert!(rung_may_pass(3, 2, Some(3.796875f64)));
+        assert!(!rung_may_pass(3, 2, Some(3.8f64)));
+        // A failure without an energy jump (a mechanism failure) goes to the core's rungs.
+        assert!(!rung_may_pass::<f64>(2, 1, None) && !rung_may_pass::<f64>(3, 1, None));
+        // In f32 the same law.
+        assert!(rung_may_pass(3, 1, Some(121.5f32)) && !rung_may_pass(3, 1, Some(122.0f32)));
+    }
+}
