@@ -206,7 +206,7 @@ impl<T: Real> Twin<T> {
         let links = self.slots.cur().links(&self.params);
         let audit = self.audit_of(&links, &w);
         audit_finite(&audit, w.t)?;
-        self.commit(&w, audit, links);
+        self.commit(&w, audit, &links);
         let (k, u) = (self.audit.kinetic, self.audit.potential);
         self.audit.initial = k + u;
         Ok(())

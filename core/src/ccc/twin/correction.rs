@@ -247,7 +247,7 @@ impl<T: Real> Twin<T> {
         let energy = self.audit.residual() - audit.residual();
         audit.correction += energy;
         self.y = w.y;
-        self.commit(w, audit, links);
+        self.commit(w, audit, &links);
         energy
     }
 

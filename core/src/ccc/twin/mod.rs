@@ -101,7 +101,7 @@ use slots::Slots;
 /// converter; the mode choice builds its reference model in the one it leaves free
 /// (the core asserts the budgets at compile time: 64 KiB and 32 KiB). A step's
 /// stack high-water is about 14 KiB in f64 and 8.5 KiB in f32 on x86_64 (S2, events
-/// included), 12.6 and 8.2 KiB painted on the Cortex-M boards.
+/// included), 12.5 and 8.0 KiB painted on the Cortex-M boards.
 ///
 /// **Step sizes.** h = 1e-4 s is the reference in f64 (S2's events within 1e-6 s of
 /// h = 5e-5 s); h = 2e-4 s is the recommended f32 step (the largest with no step
@@ -109,7 +109,7 @@ use slots::Slots;
 ///
 /// **In firmware** the twin is far too large for a stack: it lives in a `static` and is
 /// built there by [`Twin::new_in`], which initialises it in place (construction needs
-/// 7.2 KiB of stack on a Cortex-M4F in f32 and 11.0 KiB on a Cortex-M7 in f64, painted
+/// 7.5 KiB of stack on a Cortex-M4F in f32 and 11.3 KiB on a Cortex-M7 in f64, painted
 /// under QEMU, where [`Twin::new`], which returns it by value, needs 219 and 445 KiB).
 /// Only [`Twin::step`] and the outputs are called after that.
 ///
@@ -293,6 +293,12 @@ impl<T: Real> Twin<T> {
             self.candidates.clone(),
         );
         let start = self.jumps.start_rung();
+        if start > 1 {
+            crate::trace::debug!(
+                "t = {:.6} s: the step starts in {start} sub-steps (the last steps' energy jumps)",
+                self.t.to_f64()
+            );
+        }
         // How far the attempt's energy balance broke (see `Work::excess`).
         let mut excess = None;
         let mut result = self.attempt(inputs, changed, changed, start, &saved, &mut excess);
@@ -437,7 +443,7 @@ impl<T: Real> Twin<T> {
             Ok((audit, links)) => {
                 self.y = w.y;
                 self.steps += 1;
-                self.commit(&w, audit, links);
+                self.commit(&w, audit, &links);
                 self.inputs = Held::of(inputs);
                 self.at_rest = w.at_rest;
                 Ok(())
@@ -829,15 +835,19 @@ impl<T: Real> Twin<T> {
 
     /// Makes the state after a successful step the twin's: physical links (angles
     /// unwrapped), shaft, clutch torques, reactions, the energy audit.
-    fn commit(&mut self, w: &Work<T>, audit: Audit<T>, mut links: [LinkState<T>; 9]) {
+    fn commit(&mut self, w: &Work<T>, audit: Audit<T>, links: &[LinkState<T>; 9]) {
         self.t = w.t;
-        for (l, last) in links.iter_mut().zip(self.links.iter()).skip(1) {
-            l.theta = unwrap_near(l.theta, last.theta);
+        // Link by link, each angle unwrapped against the last: a whole-array move is a
+        // `memcpy` call (504 B in f64, ~400 instructions on the M7).
+        for (last, l) in self.links.iter_mut().zip(links.iter()).skip(1) {
+            *last = LinkState {
+                theta: unwrap_near(l.theta, last.theta),
+                ..*l
+            };
         }
-        let end = shaft_turn(self.slots.cur().mode, &links, &w.segment_levers);
+        let end = shaft_turn(self.slots.cur().mode, &self.links, &w.segment_levers);
         self.shaft_angle += w.shaft_turn + end;
-        self.links = links;
-        self.joints = self.slots.cur().joint_reactions(&self.params, &links);
+        self.joints = self.slots.cur().joint_reactions(&self.params, &self.links);
         self.audit = audit;
     }
 }

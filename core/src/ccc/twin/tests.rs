@@ -121,8 +121,9 @@ fn a_step_at_rest_under_other_inputs_is_evaluated() {
 /// stage had). The oracle is the same step from the same state with no history. S2 at
 /// h = 1 ms: the step from 0.262 s, with the release of lever 8, after jumps of 2.97
 /// and 20.7 tolerances (242 undivided: the ladder's rung is 4, the predicted one).
-/// Where the prediction overshoots (S2's steps from 0.173 and 0.266 s start at 4, where
-/// 3 passes) the step is the finer rung's, its balance kept as well.
+/// Where the prediction overshoots (S2's steps from 0.173 s, at 4 where 1 + 3 passed,
+/// and from 0.268 s, at 3 where 1 passed) the step is the finer rung's, its balance
+/// kept as well.
 #[test]
 fn a_predicted_first_rung_commits_the_ladders_bits() {
     let (mut twin, inputs) = s2(1e-3);
