@@ -187,7 +187,8 @@ impl<T: Real> Twin<T> {
     /// Hermite root, the next 0.4 tol past the crossing that Newton step or the
     /// secant through the last two points places (taken when they are not yet near
     /// too, if it falls inside the bracket: a release at 1 ms took a regula falsi point
-    /// before it, 4 evaluations instead of 3). S2's 18 speed events take 1 evaluation, its torque events 2–3,
+    /// before it, 4 evaluations instead of 3). S2's 18 speed events take 1 evaluation,
+    /// its torque events 2–3,
     /// instead of 2–5: a bracket closed on both sides needs a point on each, and the
     /// cubic's guess was rarely within the tolerance.
     ///

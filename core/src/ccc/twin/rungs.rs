@@ -51,8 +51,8 @@ pub(super) fn rung_may_pass<T: Real>(n: u32, done: u32, excess: Option<T>) -> bo
 /// attempt's jump times that attempt's `n⁵` if it is at least 1 (the undivided step
 /// would have failed), and none if it had an event or a coordinate switch (the motion
 /// after it is another's: S2's release at 0.2629 s broke by 242 and the step after it by
-/// 3.8). Two bytes each: the f32 twin has 8 bytes left under its 32 KiB, and a trend
-/// needs no more than 3 digits.
+/// 3.8). Two bytes each: with them the f32 twin fills its 32 KiB (32,768 B on
+/// x86_64), and a trend needs no more than 3 digits.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub(super) struct JumpHistory([u16; 2]);
 
