@@ -253,7 +253,7 @@ impl<T: Real> Simulation<T> {
     ) -> Result<R, E> {
         // The groups' unknowns with their cosines and sines (`GroupData::trig`): a
         // step taken back restores both, so its re-evaluation reproduces the state.
-        let saved = self.ws.warm_start();
+        let saved = self.ws.warm_start(self.model.groups());
         // The evaluated outputs too: at a state singular within rounding (a q̈ that a
         // position one ulp off multiplies by 1e30) re-evaluating from the warm start
         // need not reproduce them, and a failed step must leave them as they were.
@@ -293,7 +293,7 @@ impl<T: Real> Simulation<T> {
                     self.y = y0;
                     self.dp5.invalidate();
                 }
-                self.ws.restore_warm_start(&saved);
+                self.ws.restore_warm_start(self.model.groups(), &saved);
                 self.ws.restore_predictors(&predictors);
                 // Re-evaluate at the last good state (it evaluated before, from the same
                 // warm start): the workspace describes the state again.
@@ -304,7 +304,7 @@ impl<T: Real> Simulation<T> {
                 // Where that re-evaluation does not reproduce the last good state (it
                 // failed, or its Newton iterations moved the unknowns by rounding), the
                 // state shown is still the last good one, bit for bit.
-                self.ws.restore_warm_start(&saved);
+                self.ws.restore_warm_start(self.model.groups(), &saved);
                 self.ws.restore_predictors(&predictors);
                 (self.ws.body, self.ws.qdd, self.ws.motor) = outputs;
                 Err(e)

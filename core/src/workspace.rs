@@ -8,7 +8,7 @@ use crate::config::{
 };
 use crate::in_place::{elements, uninit};
 use crate::scalar::{Real, Vec2};
-use crate::structomat::GroupData;
+use crate::structomat::{Group, GroupData, GroupKind};
 use core::mem::MaybeUninit;
 use core::ptr::addr_of_mut;
 use nalgebra::{SMatrix, SVector};
@@ -71,15 +71,27 @@ pub type GroupUnknowns<T> = heapless::Vec<[T; MAX_GROUP_VARS], MAX_GROUPS>;
 pub type GroupWarmStart<T> = ([T; MAX_GROUP_VARS], [Vec2<T>; MAX_GROUP_VARS]);
 
 /// The groups' warm starts as an evaluation left them: each group's unknowns and their
-/// cosines and sines ([`GroupData::trig`]). Restored together, a re-evaluation of the
-/// state they were saved at reproduces its bits; a step taken back restores them. As
-/// many as the workspace has groups (a step saves them before each attempt: the
+/// cosines and sines ([`GroupData::trig`]), of the groups that keep one
+/// ([`keeps_warm_start`]), in order. Restored together, a re-evaluation of the state
+/// they were saved at reproduces its bits; a step taken back restores them. As many
+/// as the workspace has such groups (a step saves them before each attempt: the
 /// zeroed arrays of the core's limits, 1.2 KB in f64, cost the Cortex-M7 about 2k
 /// instructions a step in clears and copies).
 #[derive(Clone, Debug, PartialEq)]
 pub struct WarmStart<T: Real> {
     /// Each group's.
     pub groups: heapless::Vec<GroupWarmStart<T>, MAX_GROUPS>,
+}
+
+/// Whether [`Workspace::warm_start`] saves a group of `kind`: all but an RRR dyad. Its
+/// solve reads nothing of its last unknowns where it records its links' angles
+/// (`Angles::Record`: the joint it constructs gives the angles, their cosines and
+/// sines), and an evaluation after a restore records them (DP5's inner stages alone
+/// leave them stale, and take them from the evaluation before). The twin's models are
+/// mostly RRR dyads: their saves before each attempt were ~1.3 k Thumb-2 instructions
+/// a step on the Cortex-M7 in f64, in copies.
+pub fn keeps_warm_start(kind: GroupKind) -> bool {
+    kind != GroupKind::Rrr
 }
 
 /// One group's Newton predictor: `∂x/∂q`, the bias accelerations and where they were
@@ -327,23 +339,35 @@ impl<T: Real, C: Capacity<T>> Workspace<T, C> {
         }
     }
 
-    /// The groups' warm starts, to restore with [`Workspace::restore_warm_start`].
-    pub fn warm_start(&self) -> WarmStart<T> {
-        let mut groups = heapless::Vec::new();
-        for g in self.group.iter() {
-            // Never full: the workspace holds at most MAX_GROUPS groups.
-            let _ = groups.push((g.x, g.trig));
+    /// The warm starts of `groups` (the model's, this workspace's), to restore with
+    /// [`Workspace::restore_warm_start`]: every group's but an RRR dyad's (see
+    /// [`keeps_warm_start`]).
+    pub fn warm_start(&self, groups: &[Group<T>]) -> WarmStart<T> {
+        let mut saved = heapless::Vec::new();
+        for (g, gd) in groups.iter().zip(self.group.iter()) {
+            if keeps_warm_start(g.kind) {
+                // Never full: the workspace holds at most MAX_GROUPS groups.
+                let _ = saved.push((gd.x, gd.trig));
+            }
         }
-        WarmStart { groups }
+        WarmStart { groups: saved }
     }
 
-    /// Sets the groups' unknowns and their cosines and sines to `saved` (those of the
-    /// saved unknowns: Newton starts from them as they are).
-    pub fn restore_warm_start(&mut self, saved: &WarmStart<T>) {
-        for (g, (x, trig)) in self.group.iter_mut().zip(saved.groups.iter()) {
-            g.x = *x;
-            g.trig = *trig;
-            g.trig_at = *x;
+    /// Sets the unknowns of `groups` (those [`Workspace::warm_start`] saved) and their
+    /// cosines and sines to `saved` (those of the saved unknowns: Newton starts from
+    /// them as they are).
+    pub fn restore_warm_start(&mut self, groups: &[Group<T>], saved: &WarmStart<T>) {
+        let mut saved = saved.groups.iter();
+        for (g, gd) in groups.iter().zip(self.group.iter_mut()) {
+            if !keeps_warm_start(g.kind) {
+                continue;
+            }
+            let Some((x, trig)) = saved.next() else {
+                break;
+            };
+            gd.x = *x;
+            gd.trig = *trig;
+            gd.trig_at = *x;
         }
     }
 

@@ -96,10 +96,10 @@ const PINS: &[Pin<'static>] = &[
     Pin {
         args: "ccc-s2",
         exit: 0,
-        csv: "af739d94fb04d318573731ab6b3e9b3f161f3914033be75f7a2c8bdbb9dd0f2c",
+        csv: "d285fa22101ea0fd9015ae84598574da8eb9667f98bea42667587dee6ee71097",
         logs: Some((
-            "403a9ded2fa8bb87bfbacfc7b0f1e4e9f75825423e95cc1ba8a9d303b1c91cbc",
-            "63218af9a3d8c0552db3d93db705002df7665b8779b3b9ce77eda67b2ecd1c2e",
+            "3354651171d184d2cd5c6dc606af782396d767a464f782db99638e21c2c632bd",
+            "362fb3dec856e533a01179d1d99f4fbc79947a49c588136fd8cdba5f1a82e4b7",
         )),
     },
     Pin {

@@ -140,7 +140,8 @@ impl<T: Real> Twin<T> {
 
     /// The current slot's Newton warm starts back to `saved`.
     fn restore_unknowns(&mut self, saved: &crate::workspace::WarmStart<T>) {
-        self.slots.cur_mut().ws.restore_warm_start(saved);
+        let slot = self.slots.cur_mut();
+        slot.ws.restore_warm_start(slot.model.groups(), saved);
     }
 
     /// Moves the crank's angle by `d_theta` (rad) and its speed by `d_omega` (rad/s) at
@@ -185,7 +186,7 @@ impl<T: Real> Twin<T> {
             .min(T::c(MAX_DQD) / dqd.max(T::c(MAX_DQD)));
         let (d_theta, d_omega) = (d_theta * scale, d_omega * scale);
         let inputs = self.inputs.inputs();
-        let saved = self.slots.cur().ws.warm_start();
+        let saved = self.slots.cur().warm_start();
         let log = (
             self.events.clone(),
             self.switches.clone(),

@@ -91,7 +91,7 @@ impl<T: Real> Twin<T> {
             return Ok(Correction::none());
         }
         let inputs = self.inputs.inputs();
-        let saved = self.slots.cur().ws.warm_start();
+        let saved = self.slots.cur().warm_start();
         let before = self.links[CRANK];
         let links = self.slots.cur().links(&self.params);
         let mut pose = self.unwrapped(&links);

@@ -185,10 +185,7 @@ impl<T: Real> Twin<T> {
     /// point, of a Newton step back on the Hermite interpolant's slope. Near the
     /// crossing it aims just past it: the first point half the tolerance past the
     /// Hermite root, the next 0.4 tol past the crossing that Newton step or the
-    /// secant through the last two points places (taken when they are not yet near
-    /// too, if it falls inside the bracket: a release at 1 ms took a regula falsi point
-    /// before it, 4 evaluations instead of 3). S2's 18 speed events take 1 evaluation,
-    /// its torque events 2–3,
+    /// secant places. S2's 18 speed events take 1 evaluation, its torque events 2–3,
     /// instead of 2–5: a bracket closed on both sides needs a point on each, and the
     /// cubic's guess was rarely within the tolerance.
     ///
@@ -272,16 +269,12 @@ impl<T: Real> Twin<T> {
             let (g, k) = largest_fired(&self.guards, fired);
             at_hi = g > T::zero();
             let crossing = crossing_estimate((th, g), last, trusted, near);
-            let prev = last.replace((th, g));
+            last = Some((th, g));
             if b.update(th, g, k, crossing, tol) {
                 break;
             }
-            // Next: aim just past the secant's crossing; through points not `near`
-            // each other, if it falls inside the bracket.
-            let far = prev
-                .map(|(tp, gp)| th - g * (th - tp) / (g - gp))
-                .filter(|r| r.finite() && *r > b.lo && *r < b.hi);
-            if let Some(r) = crossing.or(far) {
+            // Next: aim just past the secant's crossing.
+            if let Some(r) = crossing {
                 guess = Some(r + margin);
             }
         }

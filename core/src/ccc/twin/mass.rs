@@ -41,7 +41,7 @@ impl<T: Real> Twin<T> {
         self.params.mass = mass;
         self.rocker_to_slots();
         let inputs = self.inputs.inputs();
-        let saved = self.slots.cur().ws.warm_start();
+        let saved = self.slots.cur().warm_start();
         self.dp5.invalidate();
         self.last_guards = None;
         self.at_rest = false;

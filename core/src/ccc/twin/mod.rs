@@ -101,7 +101,7 @@ use slots::Slots;
 /// converter; the mode choice builds its reference model in the one it leaves free
 /// (the core asserts the budgets at compile time: 64 KiB and 32 KiB). A step's
 /// stack high-water is about 14 KiB in f64 and 8.5 KiB in f32 on x86_64 (S2, events
-/// included), 12.5 and 8.0 KiB painted on the Cortex-M boards.
+/// included), 12.3 and 8.0 KiB painted on the Cortex-M boards.
 ///
 /// **Step sizes.** h = 1e-4 s is the reference in f64 (S2's events within 1e-6 s of
 /// h = 5e-5 s); h = 2e-4 s is the recommended f32 step (the largest with no step
@@ -282,7 +282,7 @@ impl<T: Real> Twin<T> {
         // Set again by a step committed at rest.
         self.at_rest = false;
         let changed = !same_inputs(&self.inputs, inputs);
-        let saved = self.slots.cur().ws.warm_start();
+        let saved = self.slots.cur().warm_start();
         // The last good step's log: an attempt rewrites it. Its events and switches
         // are copied only if there are any (after most steps there are none: the
         // copies of their full buffers, 416 B in f64, cost the M7 ~200 instructions a

@@ -20,7 +20,7 @@ use crate::scalar::{cross, perp, rotate_cs, Real, Vec2};
 use crate::structomat::JointKind;
 use crate::structomat::{Angles, GroupKind};
 use crate::transmission::{evaluate_velocities, evaluate_with};
-use crate::workspace::Workspace;
+use crate::workspace::{WarmStart, Workspace};
 use core::mem::MaybeUninit;
 use core::ptr::addr_of_mut;
 use nalgebra::SVector;
@@ -238,6 +238,11 @@ impl<T: Real> Slot<T> {
         )
         .map_err(|e| TwinStepError::Step(physical(&self.map, retime(e, time))))?;
         Ok(q)
+    }
+
+    /// The warm starts of the slot's groups ([`Workspace::warm_start`]).
+    pub fn warm_start(&self) -> WarmStart<T> {
+        self.ws.warm_start(self.model.groups())
     }
 
     /// Model body of physical link `p` (0: held still).

@@ -159,7 +159,8 @@ impl<T: Real> Twin<T> {
         if switched {
             self.slots.role.swap(0, 1);
         }
-        self.slots.cur_mut().ws.restore_warm_start(saved);
+        let slot = self.slots.cur_mut();
+        slot.ws.restore_warm_start(slot.model.groups(), saved);
         self.dp5.invalidate();
         self.last_guards = None;
         let w = self.work_from_state();

@@ -6,6 +6,8 @@ use super::super::super::params::CccParams;
 use super::super::error::TwinStepError;
 use super::{unwrap_near, Slot, STATE};
 use crate::ccc::mode_model;
+use crate::structomat::GroupKind;
+use crate::workspace::keeps_warm_start;
 use nalgebra::SVector;
 extern crate std;
 use std::string::ToString;
@@ -162,10 +164,17 @@ fn a_restored_warm_start_reproduces_the_evaluations_bits() {
     slot.eval_speeds(0.0, &state(q[0] - 0.01)).unwrap();
     slot.eval_speeds(0.0, &state(q[0])).unwrap();
     let first = bits(&slot);
-    let saved = slot.ws.warm_start();
+    let saved = slot.warm_start();
     let unknowns = slot.ws.unknowns();
-    assert_eq!(saved.groups.len(), slot.ws.group.iter().count());
-    assert_eq!(unknowns.len(), saved.groups.len());
+    // The RRR dyads' are not saved: their re-evaluation reads nothing of them (the
+    // restored state's bits below are the oracle).
+    let kinds = || slot.model.groups().iter().map(|g| g.kind);
+    assert_eq!(
+        saved.groups.len(),
+        kinds().filter(|k| keeps_warm_start(*k)).count()
+    );
+    assert!(!saved.groups.is_empty());
+    assert_eq!(unknowns.len(), slot.ws.group.iter().count());
     let elsewhere = |slot: &mut Slot<f64>| {
         slot.eval_speeds(0.0, &state(q[0] + 0.013)).unwrap();
         slot.eval_speeds(0.0, &state(q[0] + 0.027)).unwrap();
@@ -174,17 +183,92 @@ fn a_restored_warm_start_reproduces_the_evaluations_bits() {
     slot.eval_speeds(0.0, &state(q[0])).unwrap();
     assert_ne!(bits(&slot), first, "the moved warm start's own bits");
     elsewhere(&mut slot);
-    slot.ws.restore_warm_start(&saved);
+    slot.ws.restore_warm_start(slot.model.groups(), &saved);
     slot.eval_speeds(0.0, &state(q[0])).unwrap();
     assert_eq!(bits(&slot), first);
-    for (g, (x, _)) in slot.ws.group.iter().zip(saved.groups.iter()) {
-        assert_eq!(g.x, *x);
+    let kept = slot
+        .model
+        .groups()
+        .iter()
+        .zip(slot.ws.group.iter())
+        .filter(|(g, _)| keeps_warm_start(g.kind));
+    for ((_, gd), (x, _)) in kept.zip(saved.groups.iter()) {
+        assert_eq!(gd.x, *x);
     }
     elsewhere(&mut slot);
     slot.ws.restore_unknowns(&unknowns);
     for (g, x) in slot.ws.group.iter().zip(unknowns.iter()) {
         assert_eq!(g.x, *x);
     }
+}
+
+/// An RRR dyad keeps no warm start ([`keeps_warm_start`]): in A68 with the lever as
+/// coordinate (its driver and three RRR dyads) a step's start evaluated again, after
+/// evaluations elsewhere with the angles recorded and left stale and a restore of the
+/// driver's alone, gives its first evaluation's bits in every body's motion, angle
+/// and `q̈` (the oracle: that first evaluation, made from a fresh build).
+#[test]
+fn an_rrr_dyad_needs_no_warm_start() {
+    use super::super::inputs::{Inputs, MotorInput};
+    use super::Angles;
+    use crate::ccc::mode::Coordinates;
+    use crate::motor::Motor;
+    let p = CccParams::<f64>::reference();
+    let inputs = Inputs {
+        motor: MotorInput::Law(Motor::Constant(12.0)),
+        load: 30.0,
+        measured: None,
+    };
+    let mut slot = Slot::empty();
+    // A pose where the lever is conditioned (as in the test below: the states 0.002
+    // rad on assemble).
+    let (pose, q) = [30.0f64, 60.0, 150.0, 200.0, 250.0, 300.0]
+        .iter()
+        .find_map(|deg| {
+            let pose = initial_pose(&p, deg.to_radians(), 70f64.to_radians())?;
+            let q = slot
+                .rebuild(&p, Mode::A68, Coordinates::Lever, &pose, 0.0)
+                .ok()?;
+            (slot.conditioning() >= 0.3).then_some((pose, q))
+        })
+        .expect("a conditioned pose");
+    slot.rebuild(&p, Mode::A68, Coordinates::Lever, &pose, 0.0)
+        .unwrap();
+    // The crank's driver and three RRR dyads.
+    let rrr = slot
+        .model
+        .groups()
+        .iter()
+        .filter(|g| g.kind == GroupKind::Rrr)
+        .count();
+    assert_eq!((rrr, slot.model.groups().len()), (3, 4));
+    let state = |dq: f64| {
+        let mut y = SVector::<f64, STATE>::zeros();
+        y[0] = q[0] + dq;
+        y[2] = 5.0;
+        y
+    };
+    let eval = |slot: &mut Slot<f64>, dq: f64, a: Angles| {
+        slot.eval_with(0.0, &state(dq), &inputs, (1.0, None, 0.0), a)
+            .unwrap();
+        let mut m: std::vec::Vec<u64> = slot.ws.qdd.iter().map(|v| v.to_bits()).collect();
+        for b in slot.ws.body.iter() {
+            for v in [b.theta, b.c, b.s, b.o.x, b.o.y, b.omega, b.v.x, b.alpha] {
+                m.push(v.to_bits());
+            }
+        }
+        m
+    };
+    let first = eval(&mut slot, 0.0, Angles::Record);
+    let saved = slot.warm_start();
+    assert_eq!(saved.groups.len(), 1);
+    eval(&mut slot, 0.001, Angles::Record);
+    let stale = eval(&mut slot, 0.002, Angles::Stale);
+    slot.ws.restore_warm_start(slot.model.groups(), &saved);
+    assert_eq!(eval(&mut slot, 0.0, Angles::Record), first);
+    // The stale evaluation did leave other angles in the unknowns: the restore had
+    // something it could have restored.
+    assert_ne!(stale, eval(&mut slot, 0.002, Angles::Record));
 }
 
 /// An evaluation with the dyads' angles left stale ([`Angles::Stale`], the DP5 stages
