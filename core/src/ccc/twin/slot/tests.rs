@@ -202,6 +202,35 @@ fn a_restored_warm_start_reproduces_the_evaluations_bits() {
     }
 }
 
+/// S2's inputs for a slot's evaluation (12 N·m, a light load) and a pose of `mode`
+/// with `coords` where the choice is conditioned (0.3 at least: far from its dead
+/// points, so the states 0.002 rad on assemble), the slot built there, and its
+/// coordinates.
+fn conditioned(
+    slot: &mut Slot<f64>,
+    p: &CccParams<f64>,
+    mode: Mode,
+    coords: crate::ccc::mode::Coordinates,
+) -> (super::super::inputs::Inputs<f64>, [f64; 2]) {
+    use super::super::inputs::{Inputs, MotorInput};
+    use crate::motor::Motor;
+    let (pose, q) = [30.0f64, 60.0, 150.0, 200.0, 250.0, 300.0]
+        .iter()
+        .find_map(|deg| {
+            let pose = initial_pose(p, deg.to_radians(), 70f64.to_radians())?;
+            let q = slot.rebuild(p, mode, coords, &pose, 0.0).ok()?;
+            (slot.conditioning() >= 0.3).then_some((pose, q))
+        })
+        .expect("a conditioned pose");
+    slot.rebuild(p, mode, coords, &pose, 0.0).unwrap();
+    let inputs = Inputs {
+        motor: MotorInput::Law(Motor::Constant(12.0)),
+        load: 30.0,
+        measured: None,
+    };
+    (inputs, q)
+}
+
 /// An RRR dyad keeps no warm start ([`keeps_warm_start`]): in A68 with the lever as
 /// coordinate (its driver and three RRR dyads) a step's start evaluated again, after
 /// evaluations elsewhere with the angles recorded and left stale and a restore of the
@@ -209,31 +238,11 @@ fn a_restored_warm_start_reproduces_the_evaluations_bits() {
 /// and `q̈` (the oracle: that first evaluation, made from a fresh build).
 #[test]
 fn an_rrr_dyad_needs_no_warm_start() {
-    use super::super::inputs::{Inputs, MotorInput};
     use super::Angles;
     use crate::ccc::mode::Coordinates;
-    use crate::motor::Motor;
     let p = CccParams::<f64>::reference();
-    let inputs = Inputs {
-        motor: MotorInput::Law(Motor::Constant(12.0)),
-        load: 30.0,
-        measured: None,
-    };
     let mut slot = Slot::empty();
-    // A pose where the lever is conditioned (as in the test below: the states 0.002
-    // rad on assemble).
-    let (pose, q) = [30.0f64, 60.0, 150.0, 200.0, 250.0, 300.0]
-        .iter()
-        .find_map(|deg| {
-            let pose = initial_pose(&p, deg.to_radians(), 70f64.to_radians())?;
-            let q = slot
-                .rebuild(&p, Mode::A68, Coordinates::Lever, &pose, 0.0)
-                .ok()?;
-            (slot.conditioning() >= 0.3).then_some((pose, q))
-        })
-        .expect("a conditioned pose");
-    slot.rebuild(&p, Mode::A68, Coordinates::Lever, &pose, 0.0)
-        .unwrap();
+    let (inputs, q) = conditioned(&mut slot, &p, Mode::A68, Coordinates::Lever);
     // The crank's driver and three RRR dyads.
     let rrr = slot
         .model
@@ -285,15 +294,6 @@ fn stale_angles_change_nothing_but_the_angles() {
     use crate::ccc::mode::Coordinates;
     use crate::motor::Motor;
     let p = CccParams::<f64>::reference();
-    let constant = Inputs {
-        motor: MotorInput::Law(Motor::Constant(12.0)),
-        load: 30.0,
-        measured: None,
-    };
-    let of_angle = Inputs {
-        motor: MotorInput::Law(Motor::User(|_, theta: f64, _| 12.0 + theta.sin())),
-        ..constant
-    };
     let bits = |v: f64| v.to_bits();
     let motion = |slot: &Slot<f64>| {
         let mut m: std::vec::Vec<u64> = std::vec::Vec::new();
@@ -314,17 +314,11 @@ fn stale_angles_change_nothing_but_the_angles() {
         (Mode::A68, Coordinates::Lever),
         (Mode::I0, Coordinates::CrankSwing),
     ] {
-        // A pose where the choice is conditioned (0.3 at least: far from its dead
-        // points, so the states 0.002 rad on assemble).
-        let (pose, q) = [30.0f64, 60.0, 150.0, 200.0, 250.0, 300.0]
-            .iter()
-            .find_map(|deg| {
-                let pose = initial_pose(&p, deg.to_radians(), 70f64.to_radians())?;
-                let q = slot.rebuild(&p, mode, coords, &pose, 0.0).ok()?;
-                (slot.conditioning() >= 0.3).then_some((pose, q))
-            })
-            .expect("a conditioned pose");
-        slot.rebuild(&p, mode, coords, &pose, 0.0).unwrap();
+        let (constant, q) = conditioned(&mut slot, &p, mode, coords);
+        let of_angle = Inputs {
+            motor: MotorInput::Law(Motor::User(|_, theta: f64, _| 12.0 + theta.sin())),
+            ..constant
+        };
         let n = slot.map.dof;
         let state = |dq: f64| {
             let mut y = SVector::<f64, STATE>::zeros();
