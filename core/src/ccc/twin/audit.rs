@@ -120,19 +120,19 @@ impl<T: Real> Twin<T> {
         }
     }
 
-    /// The audit at the end of the step in `w` and the physical links it is computed
-    /// from (the state [`Twin::commit`] takes), or an error if its residual moved past
-    /// the tolerance over the step; `w.excess` is its jump over the tolerance either way.
+    /// The audit at the end of the step in `w` from the slot's physical `links` there
+    /// (the state [`Twin::commit`] takes), or an error if its residual moved past the
+    /// tolerance over the step; `w.excess` is its jump over the tolerance either way.
     pub(super) fn check_energy(
         &self,
         w: &mut Work<T>,
-    ) -> Result<(Audit<T>, [LinkState<T>; 9]), TwinStepError> {
-        let links = self.slots.cur().links(&self.params);
-        let a = self.balance_within(w, &links, T::one())?;
+        links: &[LinkState<T>; 9],
+    ) -> Result<Audit<T>, TwinStepError> {
+        let a = self.balance_within(w, links, T::one())?;
         // Passed: the jump under its tolerance, for the step's rung prediction.
         let (jump, tol) = self.jump_of(&a);
         w.excess = Some(jump.abs() / tol);
-        Ok((a, links))
+        Ok(a)
     }
 
     /// The audit `a`'s residual's jump since the last committed state's (J) and the

@@ -101,7 +101,7 @@ use slots::Slots;
 /// converter; the mode choice builds its reference model in the one it leaves free
 /// (the core asserts the budgets at compile time: 64 KiB and 32 KiB). A step's
 /// stack high-water is about 14 KiB in f64 and 8.5 KiB in f32 on x86_64 (S2, events
-/// included), 12.3 and 8.0 KiB painted on the Cortex-M boards.
+/// included), 12.1 and 8.0 KiB painted on the Cortex-M boards.
 ///
 /// **Step sizes.** h = 1e-4 s is the reference in f64 (S2's events within 1e-6 s of
 /// h = 5e-5 s); h = 2e-4 s is the recommended f32 step (the largest with no step
@@ -436,12 +436,14 @@ impl<T: Real> Twin<T> {
         // Every rung but the finest may stop at an event whose state already breaks the
         // energy balance: a finer one redoes the step, its event and mode choice anyway.
         w.audit_at_events = RETRY_SUBSTEPS.last().is_some_and(|n| substeps < *n);
-        let result = self
-            .advance(&mut w, inputs, changed, substeps)
-            .and_then(|()| self.check_energy(&mut w));
+        let advanced = self.advance(&mut w, inputs, changed, substeps);
+        // The physical links the check and the commit read, made where they stay (as
+        // a result's part they were moved twice: 504 B in f64).
+        let links = self.slots.cur().links(&self.params);
+        let result = advanced.and_then(|()| self.check_energy(&mut w, &links));
         *excess = w.excess;
         match result {
-            Ok((audit, links)) => {
+            Ok(audit) => {
                 self.y = w.y;
                 self.steps += 1;
                 self.commit(&w, audit, &links);
