@@ -68,7 +68,7 @@ use evaluate::{Stage, TorqueSource, Torques};
 use guards::{Guard, Guards};
 use inputs::{check_inputs, same_inputs, Held};
 use nalgebra::SVector;
-use rungs::{rung_may_pass, JumpHistory};
+use rungs::JumpHistory;
 use settings::{EARLY_AUDIT_MARGIN, RETRY_SUBSTEPS};
 use slot::{unwrap_near, Equations, Slot, QD, STATE};
 use slots::Slots;
@@ -259,7 +259,7 @@ struct Work<T: Real> {
     /// full one of the state at rest, at the step's end).
     at_rest: bool,
     /// The last energy check's jump over its tolerance: the one that failed the
-    /// attempt (over 1), from which [`rung_may_pass`] predicts the next rung, or the
+    /// attempt (over 1), from which [`rung_may_pass`](rungs::rung_may_pass) predicts the next rung, or the
     /// step's end's that passed, from which the next step's first rung is predicted
     /// ([`JumpHistory`]).
     excess: Option<T>,
@@ -330,41 +330,6 @@ impl<T: Real> Twin<T> {
             }
         }
         Err(failure)
-    }
-
-    /// The step redone on the finer rungs after its attempt in `done` sub-steps failed
-    /// (`failed`), its energy jump `excess` (see [`rung_may_pass`]), until one passes
-    /// or fails otherwise: that attempt's result (`failed` if no rung is left). Not
-    /// inlined: the rungs' arithmetic (f64's, a library's on the M4F) stays off the
-    /// path of a step that passes.
-    #[inline(never)]
-    fn climb(
-        &mut self,
-        inputs: &Inputs<T>,
-        changed: bool,
-        failed: Result<(), TwinStepError>,
-        (mut done, mut excess): (u32, Option<T>),
-        saved: &WarmStart<T>,
-    ) -> Result<(), TwinStepError> {
-        let mut result = failed;
-        for substeps in RETRY_SUBSTEPS {
-            if substeps <= done || !rung_may_pass(substeps, done, excess) {
-                continue;
-            }
-            crate::trace::debug!(
-                "t = {:.6} s: the step redone in {substeps} sub-steps (energy jump {excess:?} of its tolerance)",
-                self.t.to_f64()
-            );
-            // The failed attempt's restore seeded the first stage (see `attempt`): a
-            // retry takes 1 evaluation fewer (8k Thumb-2 instructions on the M7 in A68).
-            result = self.attempt(inputs, changed, changed, substeps, saved, &mut excess);
-            done = substeps;
-            match &result {
-                Err(e) if e.retry_finer() => {}
-                _ => break,
-            }
-        }
-        result
     }
 
     /// Whether a step under `inputs` can only repeat the last one at rest: that step
