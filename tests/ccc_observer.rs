@@ -467,7 +467,7 @@ fn observe_machine<T: Real>(
 
 /// The friction observer on a machine with a known friction the model lacks: S2's twin
 /// stepped open-loop with a viscous friction of 0.05 N·m·s/rad in the crank's bearing
-/// A (bench1's identified machine has 0.049 there), read through its encoders,
+/// A (`identify` finds 0.050 there on bench1), read through its encoders,
 /// observed on S2's frictionless twin with the nominal tuning without the mass's
 /// estimate, and with that tuning without the friction's estimate either
 /// (`friction_sigma` and `friction_noise` 0: the three-state filter). The oracle is

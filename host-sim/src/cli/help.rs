@@ -260,7 +260,10 @@ coefficient in [0, 1] (N·m·s/rad or N·m), converter.motor_offset in [-2, 2] N
 --fit keys: converter.link.K.mass, converter.link.K.inertia (K = 0..7, SPEC 3's
 order), converter.mass, converter.mass_inertia, converter.friction.viscous.J,
 converter.friction.coulomb.J (J one of A B C E F D5 D7 G I),
-converter.friction.clutch_drag, converter.motor_offset.
+converter.friction.clutch_drag, converter.motor_offset. Stages are separated by ';'
+(`a,b;c`: a and b searched first, c freed from their best); the default's six, then
+the friction at F: from SPEC's machine, the seven at once settle in another valley on
+some logs (the known machine's at 800 N·m and 10 N·m).
 
 The file written is the base file with the identified values at their keys (and name,
 description); its comments give each value ± its standard uncertainty from the

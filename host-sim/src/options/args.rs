@@ -462,10 +462,12 @@ pub struct IdentifyArgs {
     /// default ccc-s2, SPEC's machine
     #[arg(long, value_name = "BASE.toml")]
     pub params: Option<String>,
-    /// The parameters to fit, their run-file keys separated by commas (default
-    /// converter.mass, converter.link.1.mass, converter.link.2.mass,
-    /// converter.friction.viscous.A, converter.friction.viscous.B,
-    /// converter.friction.viscous.E)
+    /// The parameters to fit, their run-file keys separated by commas, in stages
+    /// separated by semicolons (the first stage's searched first, then with the next
+    /// stage's from their best; default converter.mass, converter.link.1.mass,
+    /// converter.link.2.mass, converter.friction.viscous.A,
+    /// converter.friction.viscous.B, converter.friction.viscous.E; then
+    /// converter.friction.viscous.F)
     #[arg(long, value_name = "KEYS")]
     pub fit: Option<String>,
     /// Nelder-Mead's iterations at most, of each of its searches (two from each start
@@ -508,7 +510,7 @@ impl IdentifyArgs {
             )));
         }
         let clutch = parse_clutch_log(self.clutch_log.as_deref())?;
-        let fit = identifiable::parse_list(self.fit.as_deref().unwrap_or(DEFAULT_FIT))
+        let (fit, stages) = identifiable::parse_stages(self.fit.as_deref().unwrap_or(DEFAULT_FIT))
             .map_err(|e| usage_err(format!("--fit: {e}")))?;
         let max_iters = match self.max_iters.as_deref() {
             None => DEFAULT_MAX_ITERS,
@@ -527,6 +529,7 @@ impl IdentifyArgs {
             params,
             base_text,
             fit,
+            stages,
             max_iters,
             out: parse_path("--out", &self.out)?,
             quiet: self.quiet,

@@ -164,6 +164,8 @@ pub struct IdentifyOptions {
     pub base_text: String,
     /// `--fit`: the parameters to fit.
     pub fit: Vec<Param>,
+    /// `--fit`'s stages: how many of the parameters (the first ones) each searches.
+    pub stages: Vec<usize>,
     /// `--max-iters`: Nelder-Mead's iterations at most.
     pub max_iters: u64,
     /// `--out`: the identified run file.

@@ -56,8 +56,8 @@
 //! and it stands for whatever of the model's error goes with the crank's speed, not
 //! only A's (the friction of B and E, seen at the crank, follows its speed too).
 //! On bench1 with SPEC's nominal parameters it settles at 0.03 N·m·s/rad from 0.1 s
-//! on, `d` at -1.2 to -1.4 N·m while the machine turns (`identify` finds 0.049 at A
-//! and 0.014 at B and at E): the two share the friction's torque, `d` its mean part
+//! on, `d` at -1.2 to -1.4 N·m while the machine turns (`identify` finds 0.050 at A
+//! and 0.010 at B, E and F): the two share the friction's torque, `d` its mean part
 //! (README, "The observer"). The identified tuning has it off (an identified twin has
 //! its friction), and so the three-state filter's bits.
 //!

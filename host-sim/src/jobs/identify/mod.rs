@@ -173,7 +173,8 @@ pub fn run(opts: &IdentifyOptions) -> Result<Fit, RunError> {
         &opts.log.1,
         opts.clutch.as_ref().map(|(_, c)| &**c),
         opts.fit.clone(),
-    );
+    )
+    .in_stages(&opts.stages);
     let fitted = fit(problem, opts.max_iters, opts.quiet)?;
     let text = run_file_text(opts, &fitted)?;
     std::fs::write(&opts.out, text)
