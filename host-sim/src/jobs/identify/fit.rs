@@ -473,6 +473,12 @@ pub fn fit(problem: Problem<'_>, max_iters: u64, quiet: bool) -> Result<Fit, Run
                 }
             }
         } else {
+            if !quiet && problem.stages.len() > 1 {
+                let _ = writeln!(
+                    std::io::stderr(),
+                    "host-sim: identify: all {k} parameters, from the last stage's best"
+                );
+            }
             let (p, u, cost) = search.horizons(problem, best_u.clone())?;
             problem = p;
             if cost < best_cost {
