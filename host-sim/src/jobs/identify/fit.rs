@@ -21,8 +21,8 @@
 //! numbers: the same inputs give the same bits.
 //!
 //! **The horizons and the starts.** The search fits the log's first [`HORIZONS`]`[0]`
-//! from [`STARTS`] starts (the base and points spread around it, [`starts`]), then the
-//! whole log from the best of them. A trial whose clutch events leave the machine's
+//! from [`STARTS`] starts (the base and points spread around it, [`starts`]), then its
+//! first [`HORIZONS`]`[1]` and the whole log, each from the last one's best. A trial whose clutch events leave the machine's
 //! sequence partway through the log has residuals that grow from there on and jump with
 //! the parameters (an event missed, the twin in another mode), and a heavier link 2
 //! with more friction at E imitates the machine over part of a log: valleys a simplex
@@ -32,7 +32,11 @@
 //! the crank up to 8.6 counts RMS); the first 0.3 s first, from one start, on 4 (up to
 //! 0.75 ms); from 4 starts on none (every event within 0.26 ms, the crank under 0.6
 //! counts RMS), at 5.2 times the replays (bench1: 6891 against 1319, 24.5 s against
-//! 9.8 s on these machines).
+//! 9.8 s on these machines). With the stages below (seven parameters) and those two
+//! horizons, the third seed of 1000/14 settled in a valley, 0.54 ms off (the six alone,
+//! 0.54 ms too); the 0.6 s horizon between them takes it to 0.015 ms, the other 14
+//! within 0.26 ms (400/12's third seed, in a valley of its own: 0.09 ms without the
+//! middle horizon), for 20 % more replays.
 //!
 //! **The stages.** A problem may free its parameters in stages
 //! ([`Problem::in_stages`]): the first `k` searched (horizons and starts as above) with
@@ -47,7 +51,8 @@
 //! in stages, 5.40 kg, 0.0138 and 0 (2.0 σ at most) and 0.09 ms. A stage's result is
 //! kept only where its whole-log cost is below its start's (the last stage's best,
 //! its new parameters at their base): the stages never end worse than the first. It
-//! doubles the replays (bench1: 12,533, 28 s on these machines).
+//! doubles the replays (bench1: 14,842 with the three horizons, 34 s on these
+//! machines).
 //!
 //! **The uncertainty.** At the optimum, the Jacobian `J` of the residuals by central
 //! differences (a step of [`JACOBIAN_STEP`] of each range), the residual variance
@@ -96,7 +101,7 @@ pub const JACOBIAN_STEP: f64 = 1e-4;
 
 /// The fractions of the log fitted in turn, each search from the last one's best (see
 /// the module's "horizons"); the last is the whole log.
-pub const HORIZONS: [f64; 2] = [0.3, 1.0];
+pub const HORIZONS: [f64; 3] = [0.3, 0.6, 1.0];
 
 /// The first horizon's starts: the base values and `STARTS - 1` points around them
 /// ([`starts`]).
