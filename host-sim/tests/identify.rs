@@ -63,7 +63,7 @@ fn value_of(fit: &identify::Fit, key: &str) -> (f64, f64) {
 /// Identified from bench1 and its clutch log (the default parameters), the open-loop
 /// replay of bench1 with the identified file reproduces the machine: the same 21
 /// events in the same order, each within 0.5 ms, and a crank residual RMS of at most
-/// 2 counts (issue 19's targets; measured on x86_64: 0.205 counts, the largest event
+/// 2 counts (issue 19's targets; measured on x86_64: 0.210 counts, the largest event
 /// difference 0.043 ms, from SPEC's 261 counts and 2 ms). The fit explains the log to
 /// its encoders' resolution: its residual standard deviation is within 10 % of the
 /// counts' quantization alone, 1/√12 counts (measured 0.276 against 0.289; without
@@ -127,8 +127,8 @@ fn bench1_identified_replays_its_clutch_log() {
 /// the twin predicts the rest of the machine's run: the open-loop replay of the whole
 /// log keeps all 21 events in order, each of the 5 after 0.5 s within 0.5 ms, and the
 /// crank's residual after 0.5 s is at most 2 counts RMS (issue 19's targets for an
-/// identified twin, here on samples the fit has not seen; measured on x86_64: 0.049 ms
-/// and 0.31 counts, where the six parameters without the friction at F missed by
+/// identified twin, here on samples the fit has not seen; measured on x86_64: 0.032 ms
+/// and 0.19 counts, where the six parameters without the friction at F missed by
 /// 0.21 ms and 0.37 counts).
 #[test]
 #[cfg_attr(debug_assertions, ignore = "release speed: cargo test --release")]

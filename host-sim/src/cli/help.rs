@@ -226,7 +226,9 @@ The clutch log (CSV: t, event, from, to; the events and modes in host-sim's name
   the twin's event log): its events are paired in order with the twin's (the twin's
   start left out). The summary lists every pair with its time difference (twin -
   machine) and names the first pair that differs (the event, the mode before or
-  after), and the events missing or extra at the end.
+  after), and the events missing or extra at the end. A twin's `inputs` event (a mode
+  change at a step's start, under the new sample) is the machine's event between the
+  same modes.
 
 --observer [nominal|identified]: the core's observer (an error-state Kalman filter on
   the crank's angle and speed) steps the twin and corrects it from the log's encoders

@@ -25,7 +25,7 @@ use structomat::ccc::FRICTION_JOINT_NAMES;
 /// alone; the cost 396 → 154; with it, each further term lowered the cost by 2 % at
 /// most), and the seven parameters from SPEC's machine find the same optimum.
 /// Identified from bench1's first 0.5 s, the seven predict the rest of the log (its
-/// last 5 events within 0.049 ms, the crank 0.31 counts RMS there) where the six
+/// last 5 events within 0.032 ms, the crank 0.19 counts RMS there) where the six
 /// without F miss by 0.21 ms and 0.37 counts: the six's masses had taken up F's
 /// friction (the rocker 5.36 kg, the oscillating mass 6.48, for 5.47 and 6.45).
 pub const DEFAULT_FIT: &str = "converter.mass,converter.link.1.mass,converter.link.2.mass,\

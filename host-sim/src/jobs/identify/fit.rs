@@ -51,7 +51,7 @@
 //! in stages, 5.40 kg, 0.0138 and 0 (2.0 σ at most) and 0.09 ms. A stage's result is
 //! kept only where its whole-log cost is below its start's (the last stage's best,
 //! its new parameters at their base): the stages never end worse than the first. It
-//! doubles the replays (bench1: 14,842 with the three horizons, 34 s on these
+//! doubles the replays (bench1: 13,609 with the three horizons, 31 s on these
 //! machines).
 //!
 //! **The uncertainty.** At the optimum, the Jacobian `J` of the residuals by central
