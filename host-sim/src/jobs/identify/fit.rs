@@ -448,7 +448,6 @@ pub fn fit(problem: Problem<'_>, max_iters: u64, quiet: bool) -> Result<Fit, Run
         .map(|u| u.clamp(0.0, 1.0))
         .collect();
     let evaluations = Rc::clone(&problem.evaluations);
-    let mut problem = problem;
     let mut best_u = u0;
     let mut search = Search {
         iterations: 0,
@@ -457,37 +456,25 @@ pub fn fit(problem: Problem<'_>, max_iters: u64, quiet: bool) -> Result<Fit, Run
         quiet,
     };
     // The whole log's cost at `best_u`: a stage's result is taken only if it improves
-    // on its start (the last stage's best, a point of its problem too).
+    // on its start (the last stage's best, a point of its problem too). Each stage is
+    // the problem of its first `k` parameters, the others at the best so far (the last
+    // stage's is the whole problem: every parameter free, the same bounds and costs).
     let mut best_cost = f64::INFINITY;
+    let n = best_u.len();
     for k in problem.stages.clone() {
-        if k < best_u.len() {
-            if !quiet {
-                let _ = writeln!(
-                    std::io::stderr(),
-                    "host-sim: identify: the first {k} of the {} parameters",
-                    best_u.len()
-                );
-            }
-            let inside: Vec<f64> = best_u.iter().map(|x| x.clamp(0.0, 1.0)).collect();
-            let stage = problem.first(k, &problem.values(&inside));
-            let (_, u, cost) = search.horizons(stage, best_u.iter().take(k).copied().collect())?;
-            if cost < best_cost {
-                best_cost = cost;
-                for (b, u) in best_u.iter_mut().zip(u) {
-                    *b = u;
-                }
-            }
-        } else {
-            if !quiet && problem.stages.len() > 1 {
-                let _ = writeln!(
-                    std::io::stderr(),
-                    "host-sim: identify: all {k} parameters, from the last stage's best"
-                );
-            }
-            let (p, u, cost) = search.horizons(problem, best_u.clone())?;
-            problem = p;
-            if cost < best_cost {
-                best_u = u;
+        if !quiet && problem.stages.len() > 1 {
+            let _ = writeln!(
+                std::io::stderr(),
+                "host-sim: identify: the first {k} of the {n} parameters"
+            );
+        }
+        let inside: Vec<f64> = best_u.iter().map(|x| x.clamp(0.0, 1.0)).collect();
+        let stage = problem.first(k, &problem.values(&inside));
+        let (_, u, cost) = search.horizons(stage, best_u.iter().take(k).copied().collect())?;
+        if cost < best_cost {
+            best_cost = cost;
+            for (b, u) in best_u.iter_mut().zip(u) {
+                *b = u;
             }
         }
     }
