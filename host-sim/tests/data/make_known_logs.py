@@ -3,18 +3,24 @@
 `known-machine.toml` (bench1's identified machine, the truth) run by the twin at
 another operating point, in bench1's format (see README.md beside this file).
 
-    python3 make_known_logs.py HOST_SIM LOAD MOTOR SEED [OUT_DIR]
+    python3 make_known_logs.py HOST_SIM LOAD MOTOR SEED [OUT_DIR [MACHINE]]
 
 HOST_SIM is a host-sim executable (`target/release/host-sim`); SEED seeds the torque
 sensor's noise (Gaussian, σ 0.02 N·m, Python's `random`); OUT_DIR (this file's folder
-if not given) is where the two files go."""
+if not given) is where the two files go; MACHINE, a converter run file with bench1's
+operating point (`load = 800.0`, `motor = 12.0`, `h = 0.0001`, as `identify` writes
+them), is the truth instead of `known-machine.toml`."""
 import csv, math, os, random, subprocess, sys, tempfile
 
 host_sim, load, motor, seed = sys.argv[1], float(sys.argv[2]), float(sys.argv[3]), int(sys.argv[4])
 here = os.path.dirname(os.path.abspath(__file__))
 out_dir = sys.argv[5] if len(sys.argv) > 5 else here
 tag = os.path.join(out_dir, f"known-{load:g}Nm-{motor:g}Nm")
-machine = open(os.path.join(here, "known-machine.toml")).read()
+machine_file = sys.argv[6] if len(sys.argv) > 6 else os.path.join(here, "known-machine.toml")
+machine = open(machine_file).read()
+for line in ("load = 800.0", "motor = 12.0", "h = 0.0001"):
+    if line not in machine:
+        sys.exit(f"{machine_file}: no line `{line}` (bench1's operating point) to replace")
 machine = (machine.replace("load = 800.0", f"load = {load}")
            .replace("motor = 12.0", f"motor = {motor}")
            .replace("h = 0.0001", "h = 0.001"))
