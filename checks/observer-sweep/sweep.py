@@ -5,11 +5,10 @@
   identification of bench1, no friction at F) at each load and motor torque of
   OPERATING_POINTS, three seeds of the torque sensor's noise each. The nominal
   tuning's searches scored on these logs: for that tuning they are its training set.
-- `held-out`: bench1 as `host-sim identify` identifies it today (seven parameters,
-  the friction at F among them), written into the work folder by an identification
-  of bench1 (30 s), at the same operating points and at HELD_OUT_POINTS, which no
-  search saw, one seed (HELD_OUT_SEED) each: logs no tuning was chosen on, the
-  nearest this check has to the kept-back logs of issue 19.
+- `held-out`: bench1 as `host-sim identify` identifies it (`bench1-identified.toml`:
+  seven parameters, the friction at F among them), at the same operating points and
+  at HELD_OUT_POINTS, which no search saw, one seed (HELD_OUT_SEED) each: logs no
+  tuning was chosen on, the nearest this check has to the kept-back logs of issue 19.
 
 The logs are written in bench1's format (`make_known_logs.py`) and replayed:
 
@@ -50,12 +49,7 @@ nominal = os.path.join(work, "nominal-110deg.toml")
 assert "crank_deg = 105.0" in spec
 open(nominal, "w").write(spec.replace("crank_deg = 105.0", "crank_deg = 110.0"))
 known = os.path.join(data, "known-machine.toml")
-held_out = os.path.join(work, "bench1-identified.toml")
-r = subprocess.run([host_sim, "identify", os.path.join(data, "bench1.csv"), "--clutch-log",
-                    os.path.join(data, "bench1_clutch_log.csv"), "--out", held_out, "--quiet"],
-                   capture_output=True, text=True)
-if r.returncode != 0:
-    sys.exit(f"the identification of bench1 failed ({r.returncode}): {r.stderr}")
+held_out = os.path.join(data, "bench1-identified.toml")
 
 
 def replay(log, clutch, params, tuning, out):

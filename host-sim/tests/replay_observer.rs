@@ -207,7 +207,7 @@ fn the_observer_keeps_a_known_machine_s_sequence_at_other_operating_points() {
 /// `known-machine.toml`, bench1's identified machine. On bench1 itself (the real
 /// machine's log; the twin's parameters fitted to it, not the machine's own) it meets
 /// issue 19's marks for an observed twin: crank residual RMS ≤ 1 count after 20 ms
-/// (measured 0.67), every one of the clutch log's 21 events within 1 ms (the worst
+/// (measured 0.78), every one of the clutch log's 21 events within 1 ms (the worst
 /// 0.88 ms), no diagnostic. On that machine's own logs at four operating points
 /// (`tests/data`, `make_known_logs.py`: 1000/14, 800/10, 600/12 and 400/12 N·m) it keeps every sequence with no
 /// diagnostic; the RMS bound is the issue's 1 count (measured 0.44 to 0.60), the
@@ -237,6 +237,38 @@ fn the_identified_tuning_follows_an_identified_twin_s_machine() {
             &dir.join(&format!("{name}-run.csv")),
         );
         follows(name, &s, events, within, 1.0);
+    }
+}
+
+/// The identified tuning on a twin identified a little off its machine: the known
+/// machine's logs (`known-machine.toml`, an identification of bench1 without the
+/// friction at F) observed on `bench1-identified.toml` (bench1 identified with it: the
+/// masses 1 to 2 % apart, F's friction 0.011 N·m·s/rad more), as a machine identified
+/// once and observed later. The oracle is the machine's log and clutch log; the marks
+/// are issue 19's (every event within 1 ms, crank RMS ≤ 1 count after 20 ms, no
+/// diagnostic). Measured: 0.51, 0.60 and 0.83 counts, every event within 0.50, 0.41
+/// and 0.63 ms. Without the locked lever's update (`held_gain` 0, the tuning before)
+/// the 600/12 sequence parted at 0.55 s (a torque estimate learnt in A68 held through
+/// the crank's reversal in the next I6 phase, where nothing else corrects it). At
+/// 400/12 the twin still parts at 0.92 s, as it does open loop with no event more than
+/// 0.84 ms off (README, "An identified twin a little off").
+#[test]
+fn an_identified_twin_a_little_off_follows_its_machine() {
+    let dir = TempDir::new("observe-identified-off");
+    let params = data("bench1-identified.toml");
+    for (name, events) in [
+        ("known-1000Nm-14Nm", 20),
+        ("known-800Nm-10Nm", 21),
+        ("known-600Nm-12Nm", 21),
+    ] {
+        let s = observed_tuned(
+            &data(&format!("{name}.csv")),
+            &data(&format!("{name}_clutch_log.csv")),
+            &params,
+            "identified",
+            &dir.join(&format!("{name}-run.csv")),
+        );
+        follows(name, &s, events, events, 1.0);
     }
 }
 
