@@ -39,7 +39,6 @@ OPERATING_POINTS = [(1000, 14), (800, 10), (800, 16), (600, 12), (400, 12)]
 SEEDS = [1, 2, 3]
 HELD_OUT_POINTS = [(900, 13), (700, 11), (500, 14)]
 HELD_OUT_SEED = 7
-REPLAYS = ("open", "identified", "exact-nom", "nominal", "open-other", "identified-other")
 
 host_sim, work = sys.argv[1], sys.argv[2]
 root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
@@ -81,6 +80,18 @@ def replay(log, clutch, params, tuning, out):
     }
 
 
+def replays(machine, other):
+    """Each replay's run file and tuning (`None`: open loop), for the logs of `machine`."""
+    return {
+        "open": (machine, None),
+        "identified": (machine, "identified"),
+        "exact-nom": (machine, "nominal"),
+        "nominal": (nominal, "nominal"),
+        "open-other": (other, None),
+        "identified-other": (other, "identified"),
+    }
+
+
 rows = []
 runs = [("known", known, held_out, load, motor, seed)
         for load, motor in OPERATING_POINTS for seed in SEEDS]
@@ -93,11 +104,7 @@ for truth, machine, other, load, motor, seed in runs:
                     str(load), str(motor), str(seed), d, machine], check=True)
     log = os.path.join(d, f"known-{load}Nm-{motor}Nm.csv")
     clutch = os.path.join(d, f"known-{load}Nm-{motor}Nm_clutch_log.csv")
-    for name, params, tuning in [("open", machine, None), ("identified", machine, "identified"),
-                                 ("exact-nom", machine, "nominal"),
-                                 ("nominal", nominal, "nominal"),
-                                 ("open-other", other, None),
-                                 ("identified-other", other, "identified")]:
+    for name, (params, tuning) in replays(machine, other).items():
         r = replay(log, clutch, params, tuning, os.path.join(d, f"{name}.csv"))
         rows.append((truth, load, motor, seed, name, r))
 
@@ -108,7 +115,7 @@ for truth, load, motor, seed, name, r in rows:
     print(f"{truth:8} {load:>5} {motor:>5} {seed:>4} {name:16} {seq:>22} {r['rms']:>8.2f} "
           f"{r['within']:>3}/{r['events']:<4} {'met' if r['met'] else '-'}")
 for truth in ("known", "held-out"):
-    for name in REPLAYS:
+    for name in replays(known, held_out):
         mine = [r for t, *_, n, r in rows if t == truth and n == name]
         kept = sum(r["same"] for r in mine)
         good = sum(r["same"] and r["rms"] <= 1.0 for r in mine)
