@@ -250,8 +250,8 @@ fn the_identified_tuning_follows_an_identified_twin_s_machine() {
 /// and 0.63 ms. Without the locked lever's update (`held_gain` 0, the tuning before)
 /// the 600/12 sequence parted at 0.55 s (a torque estimate learnt in A68 held through
 /// the crank's reversal in the next I6 phase, where nothing else corrects it). At
-/// 400/12 the twin still parts at 0.92 s, as it does open loop with no event more than
-/// 0.84 ms off (README, "An identified twin a little off").
+/// 400/12 the observed twin still parts at 0.92 s, where open loop keeps the sequence
+/// with no event more than 0.84 ms off (README, "An identified twin a little off").
 #[test]
 fn an_identified_twin_a_little_off_follows_its_machine() {
     let dir = TempDir::new("observe-identified-off");
