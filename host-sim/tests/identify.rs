@@ -69,6 +69,9 @@ fn value_of(fit: &identify::Fit, key: &str) -> (f64, f64) {
 /// counts' quantization alone, 1/√12 counts (measured 0.276 against 0.289; without
 /// the friction at F among the parameters, 0.443). The file is a converter run file
 /// that `replay --params` and `run` load; identifying twice writes the same bytes.
+/// Its values are those of `tests/data/bench1-identified.toml`, the fixture the
+/// observer's tests and `checks/observer-sweep` take as bench1's identification (its
+/// header comments, name and description, which name the paths, aside).
 #[test]
 #[cfg_attr(debug_assertions, ignore = "release speed: cargo test --release")]
 fn bench1_identified_replays_its_clutch_log() {
@@ -113,6 +116,22 @@ fn bench1_identified_replays_its_clutch_log() {
         "--quiet",
     ]);
     assert_eq!(code, 0, "{err}");
+
+    // The committed fixture is what `identify` writes today.
+    let values = |t: &str| -> Vec<String> {
+        t.lines()
+            .filter(|l| {
+                !(l.starts_with('#') || l.starts_with("name =") || l.starts_with("description ="))
+            })
+            .map(str::to_string)
+            .collect()
+    };
+    let fixture = std::fs::read_to_string(data("bench1-identified.toml")).unwrap();
+    assert_eq!(
+        values(&text),
+        values(&fixture),
+        "tests/data/bench1-identified.toml is not what identify writes of bench1"
+    );
 
     // Deterministic: the same inputs, the same bytes.
     identify::run(&identify_options(&args)).unwrap_or_else(|e| panic!("{e}"));
