@@ -24,7 +24,8 @@
 //! ```
 //!
 //! `twin-f32-at` and `twin-f32-log` are the same in f32; `STEPS_H=1e-3` in the
-//! environment sets the step (1e-4 s without it).
+//! environment sets the step (1e-4 s without it), `STEPS_SPREAD=1` spreads the events
+//! (`TwinSettings::spread_events`).
 //!
 //! `STEPS_FRICTION=1` in the environment turns the losses of a real machine on (every
 //! joint 0.02 N·m·s/rad viscous and 0.05 N·m dry, ε = 0.01 rad/s, the clutches' drag
@@ -89,9 +90,9 @@ fn twin_at<T: Real>(at: u32, n: u32, log: bool) -> Result<T, String> {
         .ok()
         .and_then(|h| h.parse::<f64>().ok())
         .unwrap_or(1e-4);
-    let mut twin = Box::new(
-        Twin::new(params(), TwinSettings::reference(T::c(h)), inputs).map_err(|e| e.to_string())?,
-    );
+    let mut settings = TwinSettings::reference(T::c(h));
+    settings.spread_events = std::env::var("STEPS_SPREAD").is_ok();
+    let mut twin = Box::new(Twin::new(params(), settings, inputs).map_err(|e| e.to_string())?);
     for k in 0..at {
         let before = (twin.mode(), twin.coordinates());
         twin.step(black_box(&inputs)).map_err(|e| e.to_string())?;

@@ -699,6 +699,112 @@ fn s2_at_the_loop_step_keeps_the_events_and_the_audit() {
     }
 }
 
+/// Issue 18's spread event steps (`TwinSettings::spread_events`): S2's second in f64 at
+/// h = 1 ms, each event's work spread over the steps after it. Against h = 1e-4 s
+/// without spreading (the reference step): the same events in the same order, each
+/// within 1e-4 s, the audit under 1e-6 of the motor's work at every step, SPEC 3's
+/// laws at every step (`check_laws`). And the spreading itself: a step that locates an
+/// event ends at it, short of the clock, with no event logged; the next logs the event
+/// at that very time without moving; a step that stands without an event returns to
+/// the preferred coordinates (one switch); every other step ends on the clock or `CATCH_UP`
+/// steps after its start, whichever is sooner (to the bit; in the jam, at rest, on the
+/// clock); the run ends on the clock.
+#[test]
+fn s2_with_spread_events_keeps_the_events_and_catches_up() {
+    let a = s2(1e-4, 1.0, DriveDirection::Cw);
+    let h = 1e-3;
+    let mut settings = TwinSettings::reference(h);
+    settings.spread_events = true;
+    let inputs = s2_inputs();
+    let mut twin = Twin::new(CccParams::reference(), settings, inputs).expect("S2 sets up");
+    let mut events = twin.events().to_vec();
+    let at_start = events.len();
+    let mut max_rel = 0.0f64;
+    // Each step: its start, its end, the clock, the events and the coordinate switches
+    // it logged, whether it ended in the jam.
+    let mut steps = Vec::new();
+    for n in 1..=1000u64 {
+        let t0 = twin.time();
+        twin.step(&inputs).expect("a step of S2");
+        check_laws(&twin, inputs.load);
+        let (t, clock) = (twin.time(), n as f64 * h);
+        let (logged, switched) = (twin.events().len(), twin.switches().len());
+        steps.push((t0, t, clock, logged, switched, twin.mode() == Mode::Jam));
+        events.extend_from_slice(twin.events());
+        let au = twin.audit();
+        if au.motor_work > 1.0 {
+            max_rel = max_rel.max((au.residual() / au.motor_work).abs());
+        }
+    }
+    let (mut choices, mut returns, mut catch_ups, mut max_lag) = (0, 0, 0, 0.0f64);
+    for (n, &(t0, t, clock, logged, switched, jam)) in steps.iter().enumerate() {
+        max_lag = max_lag.max(clock - t);
+        let next_chooses = steps.get(n + 1).is_some_and(|s| s.0 == s.1 && s.3 > 0);
+        if t == t0 {
+            // A step that stands chooses the mode at the event the step before ended
+            // at, or returns to the preferred coordinates: one or the other.
+            assert!(t < clock, "step {n}: stood at {t} s on the clock");
+            if logged > 0 {
+                assert_eq!((logged, switched), (1, 0), "step {n}");
+                assert_eq!(events[at_start + choices].time, t, "step {n}");
+                choices += 1;
+            } else {
+                assert_eq!(switched, 1, "step {n} stood for nothing");
+                returns += 1;
+            }
+        } else if next_chooses {
+            assert!(
+                t < clock && t < t0 + h * structomat::ccc::CATCH_UP,
+                "step {n}: ended at its event at {t} s"
+            );
+            assert_eq!(logged, 0, "step {n}");
+        } else {
+            // At rest nothing moves: a step in the jam goes to the clock at once;
+            // else a step catches up by CATCH_UP steps, or keeps its lag (after a
+            // step that stood, or one redone in sub-steps).
+            let catch_up = clock.min(t0 + h * structomat::ccc::CATCH_UP);
+            let keep = clock.min(t0 + h);
+            assert!(
+                t == clock || (!jam && (t == catch_up || t == keep)),
+                "step {n}: from {t0} s to {t} s"
+            );
+            catch_ups += usize::from(t == catch_up && t < clock);
+            assert_eq!(logged, 0, "step {n}");
+        }
+    }
+    assert_eq!(twin.time(), 1.0, "the run ends on the clock");
+    assert_eq!(
+        at_start + choices,
+        events.len(),
+        "every event chosen by a step of its own"
+    );
+    // regression value: S2's closest events (a shaft stop and a catch 0.9 ms apart at
+    // 0.308 s: two events, each a step to its location, a step to its choice and a
+    // step of h after it) leave the twin 4.0 steps behind the clock.
+    assert!(max_lag < 4.5 * h, "lag {max_lag}");
+    assert!(max_rel < 1e-6, "audit residual {max_rel:.3e}");
+    let key = |ev: &[Event<f64>]| -> Vec<(EventKind, Mode, f64)> {
+        ev.iter().map(|e| (e.kind, e.to, e.time)).collect()
+    };
+    let (ka, kb) = (key(&a.events), key(&events));
+    assert_eq!(ka.len(), kb.len(), "{ka:?} vs {kb:?}");
+    let mut worst = 0.0f64;
+    for (x, y) in ka.iter().zip(kb.iter()) {
+        assert_eq!(
+            (x.0, x.1),
+            (y.0, y.1),
+            "event sequences differ: {ka:?} vs {kb:?}"
+        );
+        worst = worst.max((x.2 - y.2).abs());
+    }
+    println!(
+        "spread, h = 1 ms: {} events, within {worst:.2e} s of h = 1e-4 s; audit {max_rel:.2e}; lag at most {:.3} h; {returns} returns to the preferred coordinates; {catch_ups} catching-up steps short of the clock",
+        kb.len(),
+        max_lag / h
+    );
+    assert!(worst < 1e-4, "events {worst:e} s off");
+}
+
 /// S1 (free, 12 N·m, no load): ends at a singularity of the mechanism before 0.6 s, with
 /// an error naming the diode's groups and the time; nothing is NaN before it.
 #[test]

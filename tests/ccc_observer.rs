@@ -151,6 +151,51 @@ fn bad_readings_are_named_errors_and_the_state_is_kept() {
     assert!(up.correction.is_none());
 }
 
+/// A twin that spreads its events (issue 18's real-time option) may end a step short
+/// of the clock, at an event: the observer refuses it with the setting named, the twin
+/// and the covariance as they were. The same twin steps on its own, and reports an
+/// encoder residual only on the clock.
+#[test]
+fn the_observer_refuses_a_twin_that_spreads_its_events() {
+    let mut s = TwinSettings::reference(H);
+    s.spread_events = true;
+    let mut t = Twin::new(CccParams::reference(), s, s2_inputs(None)).expect("S2 assembles");
+    let mut obs = TwinObserver::new(ObserverSettings::reference());
+    let (state, p) = (bits(&t), obs.covariance());
+    let e = obs
+        .step(
+            &mut t,
+            &s2_inputs(Some(reading((counts(105f64.to_radians()), 0)))),
+        )
+        .unwrap_err();
+    assert!(matches!(e, TwinStepError::BadInput { .. }), "{e:?}");
+    assert!(e.to_string().contains("spread_events"), "{e}");
+    assert_eq!(bits(&t), state, "the twin moved");
+    assert_eq!(obs.covariance(), p, "the observer moved");
+    // Stepped on its own with the encoder's reading, it gives a residual only on the
+    // clock: behind it (after S2's first release, at 0.0288 s) its state is not the
+    // machine's at the reading's time.
+    let (mut on, mut off) = (0, 0);
+    for n in 1..=60u32 {
+        let clock = f64::from(n) * H;
+        let m = reading((counts(105f64.to_radians()), 0));
+        t.step(&s2_inputs(Some(m)))
+            .expect("a step of the spreading twin");
+        let behind = t.time() < clock;
+        assert_eq!(t.lag() > 0.0, behind, "step {n}");
+        assert_eq!(t.measurement_residual().is_none(), behind, "step {n}");
+        if behind {
+            off += 1;
+        } else {
+            on += 1;
+        }
+    }
+    assert!(
+        off > 0 && on > 0,
+        "{off} steps behind the clock, {on} on it"
+    );
+}
+
 /// A correction of the crank by (1 mrad, 0.05 rad/s) in a 1-DOF mode (I8, the crank
 /// its coordinate) and in a 2-DOF mode (I0): the crank moves by what was asked (to the
 /// second order of the map, 1e-6 rad and 1e-3 rad/s here), the energy it

@@ -41,6 +41,17 @@ impl Run {
 }
 
 fn s2<T: Real>(h: f64, t_end: f64, load: f64, drive: DriveDirection) -> Run {
+    s2_with(TwinSettings::reference(T::c(h)), t_end, load, drive)
+}
+
+/// [`s2`] with `settings` (their step `h`): `t_end / h` steps.
+fn s2_with<T: Real>(
+    settings: TwinSettings<T>,
+    t_end: f64,
+    load: f64,
+    drive: DriveDirection,
+) -> Run {
+    let h = settings.h.to_f64();
     let inputs = Inputs {
         motor: MotorInput::Law(Motor::Constant(T::c(12.0))),
         load: T::c(load),
@@ -48,8 +59,7 @@ fn s2<T: Real>(h: f64, t_end: f64, load: f64, drive: DriveDirection) -> Run {
     };
     let mut params = CccParams::<T>::reference();
     params.drive = drive;
-    let mut twin = Twin::new(params, TwinSettings::reference(T::c(h)), inputs)
-        .expect("the reference converter sets up");
+    let mut twin = Twin::new(params, settings, inputs).expect("the reference converter sets up");
     let log = |twin: &Twin<T>, events: &mut Vec<(EventKind, Mode, f64)>| {
         events.extend(
             twin.events()
@@ -75,6 +85,9 @@ fn s2<T: Real>(h: f64, t_end: f64, load: f64, drive: DriveDirection) -> Run {
         }
         log(&twin, &mut run.events);
         if k == half {
+            // A twin that spreads its events is on the clock there too (S2 has none
+            // within 0.1 s of 0.5 s).
+            assert_eq!(twin.lag(), T::zero(), "behind the clock at 0.5 s");
             run.crank_half = Some(twin.link(1).theta.to_f64());
         }
         let a = twin.audit();
@@ -103,7 +116,7 @@ fn same_events(a: &Run, b: &Run) -> f64 {
 }
 
 /// S2 in `f32` at h = 1e-4 s runs SPEC's full second like `f64`: the same 24 events
-/// (measured: times within 2.2e-5 s), the first breakaway at the crank's dead point
+/// (measured: times within 2.4e-5 s), the first breakaway at the crank's dead point
 /// (0.0666 s, within 1e-6 s), θ1(0.5 s) within 3.3e-4 rad, the final jam at rest, and
 /// the energy audit within 5.4e-4 of the motor work (f64: 4e-11). Before f32's
 /// thresholds were fixed it took I0 at that dead point (first breakaway 0.252 s), and
@@ -177,7 +190,7 @@ fn follows(a: &Run, b: &Run, events: usize, what: &str) {
 
 /// The 1 kHz loop's step: S2's second in f32 at h = 1 ms against f64 at its reference
 /// step, 1e-4 s: the same events in the same order, each within 1e-4 s (measured:
-/// 1.1e-5 s, f32's rounding; its torque events are located to their rounding floor,
+/// 1.5e-5 s, f32's rounding; its torque events are located to their rounding floor,
 /// see `locate.rs`), θ1(0.5 s) within 2e-3 rad, and the audit within 2e-3 of the motor
 /// work (measured: 3.8e-5 at the end).
 #[test]
@@ -188,10 +201,36 @@ fn s2_f32_at_the_loop_step_follows_f64_at_its_reference_step() {
     follows(&a, &b, 20, "f32 at h = 1e-3, f64 at 1e-4");
 }
 
+/// The same with each event's work spread over the steps after it (issue 18's
+/// Cortex-M4F budget run, `TwinSettings::spread_events`): against f64 at 1e-4 s, the
+/// same events each within 1e-4 s, θ1(0.5 s) within 2e-3 rad, the audit within 2e-3 of
+/// the motor work; and against f32 at 1 ms without spreading, as close as f32's
+/// rounding lets two grids be (events within 1e-4 s).
+#[test]
+fn s2_f32_at_the_loop_step_with_spread_events_follows_f64() {
+    let a = s2::<f64>(1e-4, 1.0, 800.0, DriveDirection::Cw);
+    let mut settings = TwinSettings::<f32>::reference(1e-3);
+    settings.spread_events = true;
+    let b = s2_with(settings, 1.0, 800.0, DriveDirection::Cw);
+    // regression value: the event count of the f64 run (20 or more).
+    follows(
+        &a,
+        &b,
+        20,
+        "f32 at h = 1e-3 with its events spread, f64 at 1e-4",
+    );
+    let c = s2::<f32>(1e-3, 1.0, 800.0, DriveDirection::Cw);
+    let dt = same_events(&c, &b);
+    assert!(
+        dt < 1e-4,
+        "spread and unspread f32 events differ by {dt:.3e} s"
+    );
+}
+
 /// Without load an engaged lever carries exactly 0 and f32 rounds its torque to
 /// 2.4e-4 N·m: no release may fire on that (with f64's 1e-9 (T_r + 1 N·m) threshold it
 /// fired 600 times before 0.32 s). The same 5 events as f64 over 0.2 s (measured:
-/// times within 2.2e-7 s).
+/// times within 5.9e-7 s).
 #[test]
 fn s2_f32_without_load_does_not_chatter() {
     let a = s2::<f64>(1e-4, 0.2, 0.0, DriveDirection::Cw);

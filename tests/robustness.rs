@@ -1447,6 +1447,7 @@ fn random_settings<T: Real>(g: &mut Gen) -> TwinSettings<T> {
         }),
         switch_below: g.t(r.switch_below),
         energy_tol: T::c(g.val(TwinSettings::<T>::reference(T::c(1e-4)).energy_tol.to_f64())),
+        spread_events: g.rng.chance(0.3),
     }
 }
 

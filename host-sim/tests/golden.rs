@@ -129,10 +129,10 @@ const PINS: &[Pin<'static>] = &[
     Pin {
         args: "ccc-s2 --f32",
         exit: 0,
-        csv: "38b40cdb90b4402b2a5d800b1ad4b8deb39fbcdc5c9a0454d87fe40dab22e09a",
+        csv: "bf4fb3b02ecada7c618e74612dc9398dcd9c600a15c10c54d394f7d1c3f40679",
         logs: Some((
-            "bc74ea616d87e815889ff06a261472c8c3afab4ab37a3ffb86901101a3d74da4",
-            "376b218d2ce54134bc3f519101649e6392f96ab1de9ea2a5dce7c247ab35bd3f",
+            "ad7c16517da81b72dad0dda165a90d567ec9fdcf9b462aab104d846b83a7e0e7",
+            "4d909b94acde012266875e4d515e8d1b0318f22de88040e055bf69a182e09bc7",
         )),
     },
 ];

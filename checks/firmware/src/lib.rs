@@ -44,6 +44,9 @@ pub struct S2Run {
     pub h: f64,
     /// Steps: S2's first second.
     pub steps: u32,
+    /// [`TwinSettings::spread_events`]: each event's work spread over the steps
+    /// after it (issue 18's budget runs).
+    pub spread: bool,
 }
 
 /// S2's first second at the recommended f64 step, 1e-4 s.
@@ -51,6 +54,7 @@ const S2_H1E4: S2Run = S2Run {
     name: "s2-h1e-4",
     h: 1e-4,
     steps: 10_000,
+    spread: false,
 };
 
 /// S2's first second at the 1 kHz loop's step, 1e-3 s.
@@ -58,22 +62,35 @@ const S2_H1E3: S2Run = S2Run {
     name: "s2-h1e-3",
     h: 1e-3,
     steps: 1_000,
+    spread: false,
+};
+
+/// S2's first second at the 1 kHz loop's step with each event's work spread over the
+/// steps after it: the real-time budget's run.
+const S2_H1E3_SPREAD: S2Run = S2Run {
+    name: "s2-h1e-3-spread",
+    h: 1e-3,
+    steps: 1_000,
+    spread: true,
 };
 
 /// The f32 runs (Cortex-M4F): the recommended f32 step first (README, "In firmware":
-/// h = 2e-4 s), then 1e-4 s and 1e-3 s.
-pub const RUNS_F32: [S2Run; 3] = [
+/// h = 2e-4 s), then 1e-4 s and 1e-3 s, and 1e-3 s with its events spread.
+pub const RUNS_F32: [S2Run; 4] = [
     S2Run {
         name: "s2-h2e-4",
         h: 2e-4,
         steps: 5_000,
+        spread: false,
     },
     S2_H1E4,
     S2_H1E3,
+    S2_H1E3_SPREAD,
 ];
 
-/// The f64 runs (Cortex-M7): the recommended f64 step (1e-4 s), then 1e-3 s.
-pub const RUNS_F64: [S2Run; 2] = [S2_H1E4, S2_H1E3];
+/// The f64 runs (Cortex-M7): the recommended f64 step (1e-4 s), then 1e-3 s, and
+/// 1e-3 s with its events spread.
+pub const RUNS_F64: [S2Run; 3] = [S2_H1E4, S2_H1E3, S2_H1E3_SPREAD];
 
 /// The five-bar's steps: 0.5 s at its scenario's h = 1 ms.
 pub const FIVE_BAR_STEPS: u32 = 500;
@@ -352,7 +369,9 @@ pub fn run_s2<T: Real, C: Counter, W: Write>(
     }
     counter.paint();
     counter.start();
-    let built = new_twin(twin_slot, TwinSettings::reference(T::c(run.h)), inputs);
+    let mut settings = TwinSettings::reference(T::c(run.h));
+    settings.spread_events = run.spread;
+    let built = new_twin(twin_slot, settings, inputs);
     let twin = match built {
         Ok(t) => t,
         Err(e) => {

@@ -20,7 +20,7 @@ mod board {
     /// Its name.
     pub const SCALAR: &str = "f32";
     /// The S2 runs.
-    pub const RUNS: [structomat_firmware::S2Run; 3] = structomat_firmware::RUNS_F32;
+    pub const RUNS: [structomat_firmware::S2Run; 4] = structomat_firmware::RUNS_F32;
 }
 
 #[cfg(all(feature = "mps2-an500", not(feature = "mps2-an386")))]
@@ -32,7 +32,7 @@ mod board {
     /// Its name.
     pub const SCALAR: &str = "f64";
     /// The S2 runs.
-    pub const RUNS: [structomat_firmware::S2Run; 2] = structomat_firmware::RUNS_F64;
+    pub const RUNS: [structomat_firmware::S2Run; 3] = structomat_firmware::RUNS_F64;
 }
 
 pub use board::*;

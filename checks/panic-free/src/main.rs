@@ -109,7 +109,7 @@ fn twin<T: Real>(steps: u32) -> T {
                 sum += v;
             }
         }
-        sum += T::c((twin.events().len() + twin.switches().len()) as f64);
+        sum += T::c((twin.events().len() + twin.switches().len()) as f64) + twin.lag();
     }
     sum
 }

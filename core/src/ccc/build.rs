@@ -16,7 +16,7 @@ use crate::capacity::Capacity;
 use crate::config::MAX_BODIES;
 use crate::error::ModelError;
 use crate::model::{Link, Model, ModelBuilder};
-use crate::scalar::{Real, Vec2};
+use crate::scalar::{unit, Real, Vec2};
 use crate::structomat::{
     AssurGroup, AssurJoint, AssurLoop, AssurStep, DyadRrr, MotorR, PointRef, TriadRrRrRr,
 };
@@ -58,7 +58,7 @@ pub(crate) struct BodyMap<T> {
 }
 
 fn lever_point<T: Real>(p: &CccParams<T>, lever: usize, angle: T) -> Vec2<T> {
-    p.h + Vec2::new(angle.cos(), angle.sin()) * p.link(lever).length
+    p.h + unit(angle) * p.link(lever).length
 }
 
 /// Physical link `k` as a core link: a bar with its COG at its midpoint; the rocker
@@ -199,7 +199,7 @@ fn declare<T: Real, C: Capacity<T>, M: DerefMut<Target = Model<T, C>>>(
         if joined && k == 6 {
             // Lever 6's frame; lever 8 at the angle it had at engagement.
             let d = th(8) - th(6);
-            let u = Vec2::new(d.cos(), d.sin());
+            let u = unit(d);
             let l8 = p.link(8);
             link.add_point(u * l8.length)?;
             link.add_mass(l8.mass, l8.inertia, u * (l8.length * T::c(0.5)));
@@ -509,7 +509,7 @@ pub(crate) fn dyads_conditioning<T: Real>(
     };
     let angle = |k: usize| pose.get(k).copied().unwrap_or(T::zero());
     Some(pairs.iter().fold(T::one(), |m, (a, b)| {
-        m.min((angle(*a) - angle(*b)).sin().abs())
+        m.min((angle(*a) - angle(*b)).sincos().0.abs())
     }))
 }
 
@@ -518,7 +518,7 @@ pub(crate) fn dyads_conditioning<T: Real>(
 /// C from circles about B and E, D on the rocker, G and I from circles about D and H);
 /// `None` if it cannot assemble there.
 pub fn initial_pose<T: Real>(p: &CccParams<T>, crank: T, swing: T) -> Option<[T; 9]> {
-    let u = |a: T| Vec2::new(a.cos(), a.sin());
+    let u = unit::<T>;
     let angle = |v: Vec2<T>| v.y.atan2(v.x);
     let b = p.a + u(crank) * p.link(CRANK).length;
     let e = p.f + u(swing) * p.link(SWING).length;

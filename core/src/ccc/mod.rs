@@ -22,6 +22,7 @@ pub use observer::{
 pub use twin::{
     energy_tolerance, Audit, Converter, CoordinateSwitch, Correction, Encoder, EncoderResiduals,
     Event, EventKind, Failure, Inputs, LinkState, Measurement, MotorInput, Twin, TwinSettings,
-    TwinSetupError, TwinStepError, DIODE_HORIZON_STEPS, ENERGY_TOL_STEP, JOINTS, JOINT_NAMES,
-    MAX_EVENTS_PER_STEP, MAX_LOCATE_ITER, MAX_RETRIES, SINGULAR_CONDITIONING, SUBSTEPS,
+    TwinSetupError, TwinStepError, CATCH_UP, DIODE_HORIZON_STEPS, ENERGY_TOL_STEP, JOINTS,
+    JOINT_NAMES, MAX_EVENTS_PER_STEP, MAX_LOCATE_ITER, MAX_RETRIES, SINGULAR_CONDITIONING,
+    SUBSTEPS,
 };

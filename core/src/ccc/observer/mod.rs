@@ -498,12 +498,23 @@ impl<T: Real> TwinObserver<T> {
     /// One step of `twin` under `inputs` (the prediction), then the update from
     /// `inputs.measured` (the correction of the twin's state, the diagnostics). A
     /// refused step, or a correction that fails, leaves the twin at its last good state
-    /// (the step's, for a correction) and the covariance as it was.
+    /// (the step's, for a correction) and the covariance as it was. A twin that
+    /// spreads its events ([`TwinSettings::spread_events`](super::TwinSettings::spread_events))
+    /// is refused: its step may end short of the measurements' time.
     pub fn step(
         &mut self,
         twin: &mut Twin<T>,
         inputs: &Inputs<T>,
     ) -> Result<Update<T>, TwinStepError> {
+        if twin.settings().spread_events {
+            // A step of such a twin may end short of the clock, at an event: its state
+            // is not the machine's at the measurements' time.
+            return Err(TwinStepError::BadInput {
+                time: twin.time().to_f64(),
+                field: "twin settings: spread_events (the observer needs every step to end on the clock)",
+                value: 1.0,
+            });
+        }
         let counts = self.check_jumps(twin, inputs)?;
         // The prediction: the twin's step with the estimated torque on the crank added
         // to the motor's (a motor law that cannot take it: the estimate is held and

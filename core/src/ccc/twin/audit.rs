@@ -130,17 +130,26 @@ impl<T: Real> Twin<T> {
     ) -> Result<Audit<T>, TwinStepError> {
         let a = self.balance_within(w, links, T::one())?;
         // Passed: the jump under its tolerance, for the step's rung prediction.
-        let (jump, tol) = self.jump_of(&a);
+        let (jump, tol) = self.jump_of(&a, w.t);
         w.excess = Some(jump.abs() / tol);
         Ok(a)
     }
 
     /// The audit `a`'s residual's jump since the last committed state's (J) and the
-    /// energy tolerance at its scale (J).
-    fn jump_of(&self, a: &Audit<T>) -> (T, T) {
+    /// energy tolerance at its scale (J), for a state at time `t`: a step's, or a
+    /// catching-up step's ([`TwinSettings::spread_events`](super::TwinSettings::spread_events))
+    /// scaled by its length over `h` (the tolerance is one per unit time,
+    /// [`energy_tolerance`](super::energy_tolerance)).
+    fn jump_of(&self, a: &Audit<T>, t: T) -> (T, T) {
         let jump = a.residual() - self.audit.residual();
         let scale = T::one() + a.motor_work.abs() + a.kinetic.abs() + a.potential.abs();
-        (jump, self.settings.energy_tol * scale)
+        let h = self.settings.h;
+        let span = if self.settings.spread_events && t - self.t > h {
+            (t - self.t) / h
+        } else {
+            T::one()
+        };
+        (jump, self.settings.energy_tol * scale * span)
     }
 
     /// The audit at `w`'s state (the end of the step, or an event inside it) from the
@@ -155,7 +164,7 @@ impl<T: Real> Twin<T> {
     ) -> Result<Audit<T>, TwinStepError> {
         let a = self.audit_of(links, w);
         audit_finite(&a, w.t)?;
-        let (jump, tol) = self.jump_of(&a);
+        let (jump, tol) = self.jump_of(&a, w.t);
         if jump.abs() <= tol * margin {
             return Ok(a);
         }

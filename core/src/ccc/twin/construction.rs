@@ -76,6 +76,9 @@ impl<T: Real> Twin<T> {
             torque_source: TorqueSource::Kinetostatics,
             at_rest: false,
             jumps: JumpHistory::NONE,
+            pending: None,
+            may_catch_up: false,
+            behind: false,
         };
         twin.start_at(&q, &pose, &inputs)?;
         Ok(twin)
@@ -165,6 +168,9 @@ impl<T: Real> Twin<T> {
             addr_of_mut!((*p).torque_source).write(TorqueSource::Kinetostatics);
             addr_of_mut!((*p).at_rest).write(false);
             addr_of_mut!((*p).jumps).write(JumpHistory::NONE);
+            addr_of_mut!((*p).pending).write(None);
+            addr_of_mut!((*p).may_catch_up).write(false);
+            addr_of_mut!((*p).behind).write(false);
             place.assume_init_mut()
         }
     }
@@ -270,5 +276,8 @@ fn fields_of<T: Real>(t: &Twin<T>) {
         at_rest: _,
         lossy: _,
         jumps: _,
+        pending: _,
+        may_catch_up: _,
+        behind: _,
     } = t;
 }

@@ -196,21 +196,12 @@ impl<T: Real> Twin<T> {
         w: &mut Work<T>,
         inputs: &Inputs<T>,
     ) -> Result<bool, TwinStepError> {
-        let (mode, now) = (self.slots.cur().mode, self.slots.cur().coords);
-        let Some(&preferred) = mode.coordinate_choices().first() else {
+        let Some(preferred) = self.return_predicted() else {
             return Ok(false);
         };
-        if preferred == now {
-            return Ok(false);
-        }
+        let mode = self.slots.cur().mode;
         let pose = self.slot_links_unwrapped();
-        // The preferred choices are dyads: their conditioning at the pose needs no
-        // build, and the build is made only where it predicts a return.
-        // (The margin keeps the prediction's rounding from deciding.)
         let least = self.settings.switch_below;
-        if dyads_conditioning(mode, preferred, &pose).is_none_or(|c| c < least * T::c(1.0 - 1e-9)) {
-            return Ok(false);
-        }
         let time = w.t.to_f64();
         let (scratch, params) = self.scratch(w.switched);
         let q = match scratch.reposition(params, mode, preferred, &pose, time) {
@@ -225,6 +216,23 @@ impl<T: Real> Twin<T> {
         let before = self.slots.cur().conditioning();
         self.take_coordinates(w, inputs, (before, cond), preferred, &q)?;
         Ok(true)
+    }
+
+    /// The current mode's preferred coordinates if the twin is off them and they are
+    /// predicted conditioned at least `switch_below` at the slot's pose: the preferred
+    /// choices are dyads, whose conditioning at the pose needs no build (a few sines).
+    /// (The margin keeps the prediction's rounding from deciding.)
+    pub(super) fn return_predicted(&self) -> Option<Coordinates> {
+        let (mode, now) = (self.slots.cur().mode, self.slots.cur().coords);
+        let preferred = *mode.coordinate_choices().first()?;
+        if preferred == now {
+            return None;
+        }
+        let pose = self.slot_links_unwrapped();
+        let least = self.settings.switch_below;
+        dyads_conditioning(mode, preferred, &pose)
+            .is_some_and(|c| !(c < least * T::c(1.0 - 1e-9)))
+            .then_some(preferred)
     }
 
     /// Makes the scratch slot, assembled in `coords` at `w`'s pose with coordinates

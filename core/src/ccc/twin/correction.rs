@@ -25,6 +25,7 @@ use super::super::build::CRANK;
 use super::super::mode::Mode;
 use super::error::TwinStepError;
 use super::slot::{LinkState, QD};
+use super::spread::Pending;
 use super::Twin;
 use crate::scalar::Real;
 
@@ -168,6 +169,10 @@ impl<T: Real> Twin<T> {
                     value: v.to_f64(),
                 });
             }
+        }
+        if matches!(self.pending, Some(Pending::Choice(_))) {
+            // The state is an event's, its mode chosen by the next step: it stays.
+            return Ok(Correction::none());
         }
         let dof = self.slots.cur().map.dof.min(2);
         let row = self.slots.cur().omega_row(CRANK);

@@ -358,7 +358,8 @@ impl<T: Real> Twin<T> {
         for (k, (rod, lever)) in BRANCHES.into_iter().enumerate() {
             let (r, l) = (self.link(rod), self.link(lever));
             let delta = r.theta - l.theta;
-            let (sin, cos) = (delta.sin().to_f64(), delta.cos().to_f64());
+            let (sin, cos) = delta.sincos();
+            let (sin, cos) = (sin.to_f64(), cos.to_f64());
             let rate = sin.signum() * cos * (r.omega - l.omega).to_f64();
             let sine = sin.abs();
             let within = if rate < 0.0 {

@@ -17,6 +17,7 @@ use super::super::build::{BRANCHES, CRANK};
 use super::super::mode::{Clutch, Mode};
 use super::correction::Correction;
 use super::error::TwinStepError;
+use super::spread::Pending;
 use super::Twin;
 use crate::error::StepError;
 use crate::scalar::Real;
@@ -82,6 +83,10 @@ impl<T: Real> Twin<T> {
                 field: "held lever correction",
                 value: d.to_f64(),
             });
+        }
+        if matches!(self.pending, Some(Pending::Choice(_))) {
+            // The state is an event's, its mode chosen by the next step: it stays.
+            return Ok(Correction::none());
         }
         let (mode, coords) = (self.slots.cur().mode, self.slots.cur().coords);
         let Some(lever) = held_lever(mode) else {

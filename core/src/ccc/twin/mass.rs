@@ -90,7 +90,7 @@ impl<T: Real> Twin<T> {
         let qdd = |c: usize| slot.ws.qdd.get(c).copied().unwrap_or(T::zero());
         let rocker = self.links[ROCKER];
         let link = physical_link(&self.params, ROCKER);
-        let (c, s) = (rocker.theta.cos(), rocker.theta.sin());
+        let (s, c) = rocker.theta.sincos();
         // C from the rocker's COG (the model's, the oscillating mass included).
         let r_gc = rotate_cs(
             c,

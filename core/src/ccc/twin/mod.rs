@@ -14,7 +14,8 @@
 //! observer's update (`correction.rs`); one mode's model and workspace (`slot.rs`), the three
 //! working slots (`slots.rs`) and their staged evaluation (`evaluate.rs`); the energy
 //! audit (`audit.rs`) and the sub-steps a step takes when it breaks the balance
-//! (`rungs.rs`).
+//! (`rungs.rs`); an event's work spread over the steps after it, for a real-time
+//! loop's worst step (`spread.rs`).
 //!
 //! The twin's contract (bounded work, no allocation, size, step sizes, placement in
 //! firmware) is on [`Twin`].
@@ -41,6 +42,7 @@ mod rungs;
 mod settings;
 mod slot;
 mod slots;
+mod spread;
 
 pub use audit::Audit;
 pub use capacity::Converter;
@@ -51,8 +53,8 @@ pub use guards::{Event, EventKind};
 pub use inputs::{Encoder, Inputs, Measurement, MotorInput};
 pub use outputs::EncoderResiduals;
 pub use settings::{
-    energy_tolerance, TwinSettings, DIODE_HORIZON_STEPS, ENERGY_TOL_STEP, MAX_EVENTS_PER_STEP,
-    MAX_LOCATE_ITER, MAX_RETRIES, SINGULAR_CONDITIONING, SUBSTEPS,
+    energy_tolerance, TwinSettings, CATCH_UP, DIODE_HORIZON_STEPS, ENERGY_TOL_STEP,
+    MAX_EVENTS_PER_STEP, MAX_LOCATE_ITER, MAX_RETRIES, SINGULAR_CONDITIONING, SUBSTEPS,
 };
 pub use slot::{LinkState, JOINTS, JOINT_NAMES};
 
@@ -72,6 +74,7 @@ use rungs::JumpHistory;
 use settings::{EARLY_AUDIT_MARGIN, RETRY_SUBSTEPS};
 use slot::{unwrap_near, Equations, Slot, QD, STATE};
 use slots::Slots;
+use spread::Pending;
 
 /// The twin of one converter: its parameters, settings and state, and the working
 /// models of its modes.
@@ -227,6 +230,13 @@ pub struct Twin<T: Real> {
     /// The last two steps' energy jumps, from which the next step's first rung is
     /// predicted ([`JumpHistory::start_rung`]).
     jumps: JumpHistory,
+    /// What the last step left to this one ([`TwinSettings::spread_events`]).
+    pending: Option<Pending>,
+    /// The last step was a plain one that passed the energy check undivided: the next
+    /// may catch up with the clock ([`TwinSettings::spread_events`]).
+    may_catch_up: bool,
+    /// The twin's time is behind the clock's `n·h` ([`TwinSettings::spread_events`]).
+    behind: bool,
 }
 
 /// The working state of a step, committed only when the whole step succeeds.
@@ -263,6 +273,16 @@ struct Work<T: Real> {
     /// step's end's that passed, from which the next step's first rung is predicted
     /// ([`JumpHistory`]).
     excess: Option<T>,
+    /// What the step leaves to the next ([`TwinSettings::spread_events`]).
+    pending: Option<Pending>,
+    /// The location's last evaluation, at the event the step ends at, was a full one
+    /// ([`TwinSettings::spread_events`]).
+    evaluated_at_event: bool,
+    /// The return to the preferred coordinates the last step left to this one failed:
+    /// this step's end does not leave it to the next again.
+    return_failed: bool,
+    /// The step ends short of the clock ([`TwinSettings::spread_events`]).
+    behind: bool,
 }
 
 /// The longest first-order step [`Twin::nudge_past`] takes past a speed event, as a
@@ -282,7 +302,8 @@ impl<T: Real> Twin<T> {
         // Set again by a step committed at rest.
         self.at_rest = false;
         let changed = !same_inputs(&self.inputs, inputs);
-        let saved = self.slots.cur().warm_start();
+        let mut saved = WarmStart::EMPTY;
+        self.slots.cur().save_warm_start(&mut saved);
         // The last good step's log: an attempt rewrites it. Its events and switches
         // are copied only if there are any (after most steps there are none: the
         // copies of their full buffers, 416 B in f64, cost the M7 ~200 instructions a
@@ -309,6 +330,10 @@ impl<T: Real> Twin<T> {
         let Err(failure) = result else {
             let eventful = !(self.events.is_empty() && self.switches.is_empty());
             self.jumps = self.jumps.after(start, first_jump, eventful);
+            self.may_catch_up = !eventful
+                && self.pending.is_none()
+                && start == 1
+                && first_jump.is_some_and(|j| j < T::one());
             return Ok(());
         };
         let (events, switches, candidates) = log;
@@ -414,6 +439,8 @@ impl<T: Real> Twin<T> {
                 self.commit(&w, audit, &links);
                 self.inputs = Held::of(inputs);
                 self.at_rest = w.at_rest;
+                self.pending = w.pending;
+                self.behind = w.behind;
                 Ok(())
             }
             Err(e) => {
@@ -439,6 +466,10 @@ impl<T: Real> Twin<T> {
             restepped: false,
             at_rest: false,
             excess: None,
+            pending: None,
+            evaluated_at_event: false,
+            return_failed: false,
+            behind: false,
         }
     }
 
@@ -451,7 +482,11 @@ impl<T: Real> Twin<T> {
         changed: bool,
         substeps: u32,
     ) -> Result<(), TwinStepError> {
-        let t_end = self.step_end()?;
+        if self.settle_pending(w, inputs, changed)? {
+            return Ok(());
+        }
+        let clock = self.step_end()?;
+        let t_end = self.spread_step_end(w, clock);
         // Undivided without a conversion of `substeps` (f64's, a library's on the M4F).
         let h_max = match substeps {
             1 => self.settings.h,
@@ -484,7 +519,12 @@ impl<T: Real> Twin<T> {
             if self.sub_step_end(w, inputs, t0, h, events < MAX_EVENTS_PER_STEP)? {
                 events += 1;
             }
+            if let Some(Pending::Choice(_)) = w.pending {
+                w.behind = true;
+                return self.end_at_event(w, inputs);
+            }
         }
+        w.behind = t_end < clock;
         self.step_end_at(w, inputs, t_end)
     }
 
@@ -589,11 +629,23 @@ impl<T: Real> Twin<T> {
         }
         let (theta, kind, evaluated) = self.locate(w, t0, h, (&g0, &r0), fired, inputs)?;
         self.last_guards = None;
+        // f64 only (decided at compile time): f32's energy tolerance is its rounding
+        // floor, 1.2e-4 of the scale, four orders over the dense output's error at S2's
+        // events (70 f64 tolerances of 1e-8 at most), and no f32 step of S2 is redone
+        // at h = 1 ms; the f32 twin's code stays within issue 18's 128 KB (2 KB more
+        // with it).
+        let audit_event = w.audit_at_events
+            && core::mem::size_of::<T>() == 8
+            && self.slots.cur().mode != Mode::Coast;
         if !evaluated {
             let mut ye = SVector::<T, STATE>::zeros();
             self.dp5.dense(theta, &mut ye);
             w.t = t0 + theta * h;
             w.y = ye;
+            if self.settings.spread_events && !audit_event {
+                // The step ends here, evaluated in full by `Twin::end_at_event`.
+                return Ok(self.pend_choice(w, kind, false));
+            }
             // The mode choice reads the old mode's positions and speeds only (the
             // new mode is evaluated in full): no accelerations or kinetostatics.
             self.slots
@@ -601,18 +653,15 @@ impl<T: Real> Twin<T> {
                 .eval_speeds(w.t, &w.y)
                 .map_err(|e| self.physical_error(e))?;
         }
-        // f64 only (decided at compile time): f32's energy tolerance is its rounding
-        // floor, 1.2e-4 of the scale, four orders over the dense output's error at S2's
-        // events (70 f64 tolerances of 1e-8 at most), and no f32 step of S2 is redone
-        // at h = 1 ms; the f32 twin's code stays within issue 18's 128 KB (2 KB more
-        // with it).
-        if w.audit_at_events
-            && core::mem::size_of::<T>() == 8
-            && self.slots.cur().mode != Mode::Coast
-            && !self.event_state(w, inputs, (&g0, kind), theta * h)?
-        {
+        if audit_event && !self.event_state(w, inputs, (&g0, kind), theta * h)? {
             // Stepped to just before the event: the segment goes on from there.
             return Ok(false);
+        }
+        if self.settings.spread_events {
+            // A torque function is located on full evaluations; a speed function on
+            // the speeds alone.
+            let full = evaluated && matches!(kind, EventKind::Release(_) | EventKind::Breakaway);
+            return Ok(self.pend_choice(w, kind, full));
         }
         self.choose(w, kind, inputs)?;
         Ok(true)
@@ -772,12 +821,16 @@ impl<T: Real> Twin<T> {
         // again cost 24k instructions at S2's catches into A68, whose lever choice is
         // then at its dead point (the lever stops as it catches) and fails to assemble
         // each time. The next step's end scans as usual.
-        if self.slots.cur().mode != Mode::Jam
-            && !w.chosen
-            && !self.return_to_preferred(w, inputs)?
-            && self.slots.cur().conditioning() < self.settings.switch_below
-        {
-            self.switch_coordinates(w, inputs, None)?;
+        if self.slots.cur().mode != Mode::Jam && !w.chosen {
+            if self.settings.spread_events && !w.return_failed && self.return_predicted().is_some()
+            {
+                // The return is the next step's (`Twin::settle_pending`).
+                w.pending = Some(Pending::Return);
+            } else if !self.return_to_preferred(w, inputs)?
+                && self.slots.cur().conditioning() < self.settings.switch_below
+            {
+                self.switch_coordinates(w, inputs, None)?;
+            }
         }
         if !same_bits(w.t, t_end) {
             w.t = t_end;

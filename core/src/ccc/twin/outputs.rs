@@ -8,9 +8,10 @@ use super::super::params::CccParams;
 use super::audit::Audit;
 use super::coordinates::CoordinateSwitch;
 use super::guards::Event;
+use super::settings::TwinSettings;
 use super::slot::{LinkState, QD};
 use super::Twin;
-use crate::scalar::{Real, Vec2};
+use crate::scalar::{unit, Real, Vec2};
 
 /// The twin's angles less the measured ones, rad, of each encoder measured.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -24,9 +25,25 @@ pub struct EncoderResiduals<T> {
 }
 
 impl<T: Real> Twin<T> {
-    /// Time, s.
+    /// Time, s: `n·h` after `n` steps, unless the twin spreads its events
+    /// ([`TwinSettings::spread_events`]) and is
+    /// behind the clock after one ([`Twin::lag`]).
     pub fn time(&self) -> T {
         self.t
+    }
+
+    /// How far the twin's time is behind the clock's `n·h` after `n` steps, s: 0
+    /// unless it spreads its events ([`TwinSettings::spread_events`]): an event adds
+    /// up to 2 `h` (the step to its location, the step to its choice), and each
+    /// catching-up step takes [`CATCH_UP`](super::CATCH_UP)` - 1` steps off (S2 at
+    /// h = 1 ms: at most 4.0 `h`, after two events 0.9 ms apart).
+    pub fn lag(&self) -> T {
+        T::c(self.steps as f64) * self.settings.h - self.t
+    }
+
+    /// The settings fixed at start.
+    pub fn settings(&self) -> &TwinSettings<T> {
+        &self.settings
     }
 
     /// Steps taken.
@@ -124,7 +141,7 @@ impl<T: Real> Twin<T> {
             1 => self.params.link(p).length,
             _ => self.params.rocker_d,
         };
-        s.origin + Vec2::new(s.theta.cos(), s.theta.sin()) * x
+        s.origin + unit(s.theta) * x
     }
 
     /// Shaft speed, rad/s, CCW positive (0 while held).
@@ -166,8 +183,13 @@ impl<T: Real> Twin<T> {
 
     /// The twin's angles less the measured ones of the last step's inputs (each
     /// encoder's angle, [`Encoder::angle`](super::Encoder::angle)), rad: the crank's
-    /// θ1, the shaft's angle in the drive direction, the rocker's θ.
+    /// θ1, the shaft's angle in the drive direction, the rocker's θ. `None` while the
+    /// twin is behind the clock ([`Twin::lag`]): its state is not the machine's at the
+    /// measurements' time.
     pub fn measurement_residual(&self) -> Option<EncoderResiduals<T>> {
+        if self.behind {
+            return None;
+        }
         let [crank, shaft, rocker] = self.inputs.angles?;
         let of = |a: Option<T>, twin: T| a.map(|a| twin - a);
         Some(EncoderResiduals {

@@ -92,7 +92,24 @@ pub struct TwinSettings<T> {
     /// under 4e-11 at h = 1e-4 s; S1's last steps before the diode stretches grow past
     /// 1e-9 each. Reference: [`energy_tolerance`].
     pub energy_tol: T,
+    /// Spread an event's work over the steps that follow it, for a real-time loop's
+    /// worst step (issue 18's budget): the step that finds an event ends at it (the
+    /// event located, the state there in the old mode: exact, committed and audited),
+    /// the next step chooses the new mode at that state without moving in time, and
+    /// the steps after catch up with the clock, [`CATCH_UP`] steps long at most, until
+    /// a step ends at `(n + 1)·h` again. Each step then holds one DP5 step and a
+    /// location, or one mode choice, where an event step held two DP5 steps, the
+    /// location and the choice. The twin's time ([`Twin::time`](super::Twin::time))
+    /// lags the clock after an event ([`Twin::lag`](super::Twin::lag): S2 at h = 1 ms
+    /// up to 4 h). `false` (the reference): every step ends at `(n + 1)·h`.
+    pub spread_events: bool,
 }
+
+/// The longest step a twin with [`TwinSettings::spread_events`] takes to catch up with
+/// the clock after an event, in steps `h`: one DP5 step (under the 1.5 `h` past which
+/// a step's rest is split), so a catching-up step costs what a plain one does; a lag of
+/// 2 `h` is made up in five steps.
+pub const CATCH_UP: f64 = 1.4;
 
 impl<T: Real> TwinSettings<T> {
     /// SPEC 3's initial state (q1 = 105°, q2 = 90°, at rest) with the diode, at step `h`.
@@ -106,6 +123,7 @@ impl<T: Real> TwinSettings<T> {
             swing_speed: T::zero(),
             switch_below: T::c(0.2),
             energy_tol: energy_tolerance(h),
+            spread_events: false,
         }
     }
 }

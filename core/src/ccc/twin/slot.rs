@@ -245,6 +245,11 @@ impl<T: Real> Slot<T> {
         self.ws.warm_start(self.model.groups())
     }
 
+    /// [`Slot::warm_start`] into `saved` ([`Workspace::save_warm_start`]).
+    pub fn save_warm_start(&self, saved: &mut WarmStart<T>) {
+        self.ws.save_warm_start(self.model.groups(), saved);
+    }
+
     /// Model body of physical link `p` (0: held still).
     pub fn body(&self, p: usize) -> u8 {
         self.map.body.get(p).copied().unwrap_or(0)
