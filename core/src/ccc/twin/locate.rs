@@ -100,37 +100,19 @@ pub(super) fn hermite_root<T: Real>(
 }
 
 /// The root in (0, 1) of the quadratic through an event function's values `g0 ≤ 0`
-/// and `g1 > 0` at the step's ends and `gm` at θ = -r (the start of the step before,
-/// `r` its length over this one's), to `tol`/100; O(h³) from the true crossing. For
-/// the torque functions, whose rates the evaluation does not give. `None` if the
-/// values do not bracket a root.
-pub(super) fn quadratic_root<T: Real>(gm: T, r: T, g0: T, g1: T, tol: T) -> Option<(T, T)> {
-    // p(θ) = g0 + a θ + b θ², p(1) = g1, p(-r) = gm.
-    let b = (gm - g0 + r * (g1 - g0)) / (r * (T::one() + r));
+/// and `g1 > 0` at the step's ends and `g3` at `θ3`, to `tol`/100. For the torque
+/// functions, whose rates the evaluation does not give: `θ3 = -r` is the start of the
+/// step before (`r` its length over this one's; O(h³) from the true crossing), or,
+/// with no step before (the step after an event), `θ3` inside the step is the
+/// location's first point. S2's release of lever 6 at 0.2713 s, 0.7 ms after a shaft
+/// stop, came within 1.5 % of the step from the regula falsi's first point (the
+/// function curves: -37, 4.4 and 28 N·m at 0, 0.57 and 1), within 0.15 % from this
+/// quadratic's root. `None` if the values do not bracket a root.
+pub(super) fn quadratic_root<T: Real>(t3: T, g3: T, g0: T, g1: T, tol: T) -> Option<(T, T)> {
+    // p(θ) = g0 + a θ + b θ², p(1) = g1, p(θ3) = g3.
+    let b = (g3 - g0 - (g1 - g0) * t3) / (t3 * (t3 - T::one()));
     let a = g1 - g0 - b;
     if !(a.finite() && b.finite()) {
-        return None;
-    }
-    bracketed_root(
-        |th: T| (g0 + th * (a + th * b), a + T::c(2.0) * th * b),
-        g0,
-        g1,
-        tol,
-    )
-}
-
-/// The root in (0, 1) of the quadratic through an event function's values `g0 ≤ 0`
-/// and `g1 > 0` at the step's ends and `gm` at `θm` inside it, to `tol`/100. For a
-/// torque function with no step before to take [`quadratic_root`] through: S2's release
-/// of lever 6 at 0.2713 s, 0.7 ms after a shaft stop, came within 1.5 % of the step
-/// from the regula falsi's first point (the function curves: -37, 4.4 and 28 N·m at
-/// 0, 0.57 and 1), within 0.15 % from this quadratic's root. `None` if the values do
-/// not bracket a root or `θm` is not inside the step.
-fn quadratic_root_through<T: Real>((g0, tm, gm, g1): (T, T, T, T), tol: T) -> Option<(T, T)> {
-    // p(θ) = g0 + a θ + b θ², p(1) = g1, p(θm) = gm.
-    let b = ((gm - g0) / tm - (g1 - g0)) / (tm - T::one());
-    let a = g1 - g0 - b;
-    if !(tm > T::zero() && tm < T::one() && a.finite() && b.finite()) {
         return None;
     }
     bracketed_root(
@@ -303,7 +285,7 @@ impl<T: Real> Twin<T> {
             if let Some(r) = crossing {
                 guess = Some(r + margin);
             } else if core::mem::take(&mut three_point) {
-                guess = quadratic_root_through((glo, th, g, ghi), tol).map(|(r, _)| r + margin);
+                guess = quadratic_root(th, g, glo, ghi, tol).map(|(r, _)| r + margin);
             }
         }
         crate::trace::debug!(
@@ -352,7 +334,7 @@ impl<T: Real> Twin<T> {
                     hermite_root(a, b, ra * h, rb * h, before, tol)
                 }
                 (Some(a), Some(b), _, _) if !speeds_only => {
-                    before.and_then(|(gm, r)| quadratic_root(gm, r, a, b, tol))
+                    before.and_then(|(gm, r)| quadratic_root(-r, gm, a, b, tol))
                 }
                 _ => None,
             }
