@@ -598,3 +598,117 @@ fn a_run_ending_in_jam_says_the_linkage_is_held() {
         "{err}"
     );
 }
+
+// `--spread-events` (or the run file's `run.spread_events`): S2 at the 1 kHz loop's
+// step with each event's work spread over the steps after it, as on the Cortex-M4F.
+// The oracle is S2 at h = 1e-4 s unspread: the same events in the same order, each
+// within issue 18's 1e-4 s; the twin's time lags the clock after events by a few
+// steps (the summary's figure is the rows' own), catches up by the end, and the run
+// file's key gives the flag's bits. The FMU and replay refuse such a twin by name, a
+// mechanism file refuses the key.
+#[test]
+fn s2_with_spread_events_keeps_the_events_of_a_fine_step() {
+    let (fine, spread, keyed) = (
+        Files::new("spread-oracle"),
+        Files::new("spread"),
+        Files::new("spread-key"),
+    );
+    let t_end = "0.35";
+    let (code, _, err) = run(&["run", "ccc-s2", "--t-end", t_end, "--out", fine.out()]);
+    assert_eq!(code, 0, "{err}");
+    let (code, out, err) = run(&[
+        "run",
+        "ccc-s2",
+        "--h",
+        "1e-3",
+        "--t-end",
+        t_end,
+        "--spread-events",
+        "--out",
+        spread.out(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+
+    let (a, b) = (Csv::read(&fine.events), Csv::read(&spread.events));
+    let names = |c: &Csv| -> Vec<String> {
+        c.rows
+            .iter()
+            .map(|r| format!("{} {}->{}", r[1], r[2], r[3]))
+            .collect()
+    };
+    assert_eq!(names(&a), names(&b), "the event sequences part");
+    assert!(a.rows.len() >= 17, "{} events", a.rows.len());
+    for ((ta, tb), n) in a.num("time").iter().zip(b.num("time")).zip(names(&a)) {
+        assert!(
+            (ta - tb).abs() <= 1e-4,
+            "{n}: {ta} s at 1e-4, {tb} s spread"
+        );
+    }
+
+    // Some rows stand off the clock (the steps that end at an event or catch up), the
+    // times never go back, and the last row is on the clock again.
+    let h = 1e-3;
+    let t = Csv::read(&spread.csv).num("t");
+    assert_eq!(t.len(), 351);
+    assert!(t.windows(2).all(|w| w[0] <= w[1]), "t goes back");
+    let lags: Vec<f64> = t
+        .iter()
+        .enumerate()
+        .map(|(k, &t)| k as f64 * h - t)
+        .collect();
+    let most = lags.iter().cloned().fold(0.0, f64::max);
+    assert!(lags.iter().filter(|&&l| l > 1e-9).count() >= 16, "{lags:?}");
+    assert!(most > h && most < 5.0 * h, "largest lag {most} s");
+    assert!((t[350] - 0.35).abs() < 1e-12, "last t = {}", t[350]);
+    let said = number_after(line(&out, "spread"), "by at most ");
+    // The summary gives 6 digits.
+    assert!(
+        (said - most).abs() <= 1e-5 * most,
+        "summary {said}, rows {most}"
+    );
+
+    // The run file's key gives the same bits as the flag.
+    let dir = std::env::temp_dir();
+    let file = dir.join(format!("host-sim-ccc-{}-spread.toml", std::process::id()));
+    let s2 = include_str!("../scenarios/ccc-s2.toml");
+    std::fs::write(&file, format!("{s2}spread_events = true\n")).expect("write run file");
+    let path = file.to_str().expect("utf-8");
+    let (code, _, err) = run(&[
+        "run",
+        path,
+        "--h",
+        "1e-3",
+        "--t-end",
+        t_end,
+        "--out",
+        keyed.out(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(
+        std::fs::read(&spread.csv).expect("csv"),
+        std::fs::read(&keyed.csv).expect("csv"),
+        "run.spread_events and --spread-events differ"
+    );
+
+    // Refused by name: an FMU of it, a mechanism's key.
+    let fmu = dir.join(format!("host-sim-ccc-{}-spread.fmu", std::process::id()));
+    let (code, _, err) = run(&["fmu", path, "--out", fmu.to_str().expect("utf-8")]);
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("run.spread_events") && err.contains("communication point"),
+        "{err}"
+    );
+    assert!(!fmu.exists());
+    let five = include_str!("../scenarios/five-bar.toml");
+    std::fs::write(&file, format!("{five}spread_events = true\n")).expect("write run file");
+    let (code, _, err) = run(&["run", path]);
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("run.spread_events: only in a converter file"),
+        "{err}"
+    );
+    let _ = std::fs::remove_file(&file);
+    for f in [fine, spread, keyed] {
+        f.remove();
+    }
+}

@@ -302,6 +302,24 @@ fn bad_logs_are_named_errors() {
         "{err}"
     );
     assert!(!std::path::Path::new(&out).exists());
+    // A twin that spreads its events lags the log's clock: no sample-by-sample replay.
+    let spread = dir.join("spread.toml");
+    let s2 = include_str!("../scenarios/ccc-s2.toml");
+    std::fs::write(&spread, format!("{s2}spread_events = true\n")).unwrap();
+    let (code, _, err) = run(&[
+        "replay",
+        &data("bench1.csv"),
+        "--params",
+        &spread,
+        "--out",
+        &out,
+    ]);
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("run.spread_events = true: replay compares"),
+        "{err}"
+    );
+    assert!(!std::path::Path::new(&out).exists());
     // The output may not be an input.
     let copy = dir.join("log.csv");
     std::fs::copy(data("bench1.csv"), &copy).unwrap();

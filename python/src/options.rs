@@ -13,8 +13,17 @@ use pyo3::types::{PyBool, PyDict, PyFloat, PyInt};
 
 /// The keywords of a run and of a twin, as `host-sim run`'s options (`t_end` is
 /// `--t-end`; `step` is `--h`'s alias).
-pub const RUN_KEYWORDS: [&str; 9] = [
-    "h", "step", "t_end", "every", "f32", "f64", "motor", "load", "ccw",
+pub const RUN_KEYWORDS: [&str; 10] = [
+    "h",
+    "step",
+    "t_end",
+    "every",
+    "f32",
+    "f64",
+    "motor",
+    "load",
+    "ccw",
+    "spread_events",
 ];
 
 /// The text of a number keyword `name`: a Python `int` or `float` (not a `bool`), as
@@ -71,6 +80,7 @@ pub fn run_options(source: &str, overrides: Option<&Bound<'_, PyDict>>) -> PyRes
                 "f32" => args.f32 = flag(&key, &value)?,
                 "f64" => args.f64 = flag(&key, &value)?,
                 "ccw" => args.converter.ccw = flag(&key, &value)?,
+                "spread_events" => args.spread_events = flag(&key, &value)?,
                 _ => {
                     return Err(PyTypeError::new_err(format!(
                         "unexpected keyword argument '{key}' (the keywords of a run: {})",

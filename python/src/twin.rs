@@ -71,7 +71,7 @@ fn v<T: Real>(x: T) -> f64 {
 impl Twin {
     /// A twin of the converter scenario `source` (`ccc-s1`, `ccc-s2` or a converter
     /// run file) with `host-sim run`'s converter options (`h`, `motor`, `load`, `ccw`,
-    /// `f32`), at its initial state, its first mode chosen under the scenario's motor
+    /// `spread_events`, `f32`), at its initial state, its first mode chosen under the scenario's motor
     /// and load.
     #[new]
     #[pyo3(signature = (source = "ccc-s2", **overrides))]
@@ -153,6 +153,13 @@ impl Twin {
     #[getter]
     fn time(&self) -> f64 {
         each!(self, t => v(t.time()))
+    }
+
+    /// How far the twin's time is behind the clock's `steps · h`, s: 0 unless it
+    /// spreads its events (`spread_events=True`), a few steps at most after an event.
+    #[getter]
+    fn lag(&self) -> f64 {
+        each!(self, t => v(t.lag()))
     }
 
     /// The fixed step, s.

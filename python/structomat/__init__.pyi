@@ -38,6 +38,7 @@ def run(
     motor: Optional[float] = ...,
     load: Optional[float] = ...,
     ccw: bool = ...,
+    spread_events: bool = ...,
 ) -> Result: ...
 
 def scenarios() -> List[Tuple[str, str]]: ...
@@ -62,6 +63,7 @@ class Twin:
         motor: Optional[float] = ...,
         load: Optional[float] = ...,
         ccw: bool = ...,
+    spread_events: bool = ...,
     ) -> None: ...
     def step(
         self,
@@ -74,6 +76,8 @@ class Twin:
     def steps(self) -> int: ...
     @property
     def time(self) -> float: ...
+    @property
+    def lag(self) -> float: ...
     @property
     def h(self) -> float: ...
     @property

@@ -21,6 +21,10 @@ mod board {
     pub const SCALAR: &str = "f32";
     /// The S2 runs.
     pub const RUNS: [structomat_firmware::S2Run; 4] = structomat_firmware::RUNS_F32;
+    /// Whether a 1 kHz loop spreads each event's work over the steps after it
+    /// (`TwinSettings::spread_events`): on the M4F in f32 that keeps S2's worst step
+    /// within the period's 112,000 instructions (228,280 unspread).
+    pub const SPREAD: bool = true;
 }
 
 #[cfg(all(feature = "mps2-an500", not(feature = "mps2-an386")))]
@@ -33,6 +37,10 @@ mod board {
     pub const SCALAR: &str = "f64";
     /// The S2 runs.
     pub const RUNS: [structomat_firmware::S2Run; 3] = structomat_firmware::RUNS_F64;
+    /// Whether a 1 kHz loop spreads each event's work over the steps after it: not on
+    /// the M7 in f64, where the steps after a catch need sub-steps and a spread run's
+    /// worst step (382,560) is dearer than an unspread one's (317,520).
+    pub const SPREAD: bool = false;
 }
 
 pub use board::*;

@@ -69,6 +69,12 @@ pub struct RunArgs {
     /// The converter's motor, load and direction.
     #[command(flatten)]
     pub converter: ConverterArgs,
+    /// Converter scenarios: spread each event's work over the steps after it, as a
+    /// firmware twin keeping its worst step within the loop's period does (default: the
+    /// run file's run.spread_events, else off); the twin's time then lags the clock by
+    /// a few steps after each event
+    #[arg(long, help_heading = CONVERTER)]
+    pub spread_events: bool,
 }
 
 /// The step and the horizon, as `run` and `fmu` take them.
@@ -136,7 +142,13 @@ impl RunArgs {
         }
         let fps = self.fps.as_deref().map(parse_fps).transpose()?;
         let slow = self.slow.as_deref().map(parse_slow).transpose()?;
-        check_converter_options(&scenario, converter.ccw, load.is_some(), motor.is_some())?;
+        check_converter_options(
+            &scenario,
+            converter.ccw,
+            load.is_some(),
+            motor.is_some(),
+            self.spread_events,
+        )?;
         // The run file's own output settings, unless the arguments give them.
         let file = scenario.run_file().ok();
         let every = every.unwrap_or_else(|| file.as_ref().map_or(1, |f| f.run.every));
@@ -157,6 +169,7 @@ impl RunArgs {
             ccw: converter.ccw,
             load,
             motor,
+            spread_events: self.spread_events,
             plot,
             animate,
             fps: fps.unwrap_or(DEFAULT_FPS),
@@ -203,11 +216,20 @@ impl FmuArgs {
             ..RunArgs::default()
         }
         .options()?;
-        if run.scenario.converter().is_none() {
-            return Err(usage_err(format!(
-                "fmu: {} is not a converter: the FMU is the converter's twin (ccc-s1, ccc-s2 or a converter run file)",
-                run.scenario.name()
-            )));
+        match run.scenario.converter() {
+            None => {
+                return Err(usage_err(format!(
+                    "fmu: {} is not a converter: the FMU is the converter's twin (ccc-s1, ccc-s2 or a converter run file)",
+                    run.scenario.name()
+                )))
+            }
+            Some(c) if c.converter.spread_events => {
+                return Err(usage_err(format!(
+                    "fmu: {}: run.spread_events = true: an FMU's outputs are the converter's at each communication point, and a twin that spreads its events lags the clock after each (remove the key for the FMU)",
+                    run.scenario.name()
+                )))
+            }
+            Some(_) => {}
         }
         let out = parse_path("--out", &self.out)?;
         let lib = self
@@ -437,6 +459,17 @@ impl ReplayArgs {
                 params.name()
             )));
         }
+        if params
+            .converter()
+            .is_some_and(|c| c.converter.spread_events)
+        {
+            return Err(usage_err(format!(
+                "--params: {}: run.spread_events = true: replay compares the twin with the \
+                 log sample by sample, and a twin that spreads its events lags the log's \
+                 clock after each (remove the key to replay)",
+                params.name()
+            )));
+        }
         let clutch = parse_clutch_log(self.clutch_log.as_deref())?;
         Ok(ReplayOptions {
             log,
@@ -651,8 +684,14 @@ fn check_converter_options(
     ccw: bool,
     load: bool,
     motor: bool,
+    spread_events: bool,
 ) -> Result<(), UsageError> {
-    let given = [("--ccw", ccw), ("--load", load), ("--motor", motor)];
+    let given = [
+        ("--ccw", ccw),
+        ("--load", load),
+        ("--motor", motor),
+        ("--spread-events", spread_events),
+    ];
     if !scenario.is_converter() {
         if let Some((name, _)) = given.iter().find(|(_, g)| *g) {
             return Err(usage_err(format!(

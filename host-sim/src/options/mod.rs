@@ -62,6 +62,9 @@ pub struct RunOptions {
     /// Converter scenarios: constant motor torque on the crank, N·m, CCW positive
     /// (`None`: the scenario's).
     pub motor: Option<f64>,
+    /// Converter scenarios: `--spread-events`, each event's work spread over the steps
+    /// after it (`false`: the run file's `run.spread_events`).
+    pub spread_events: bool,
     /// `--plot DIR`: where the plots go.
     pub plot: Option<PathBuf>,
     /// `--animate FILE`: the animations to write (`.svg`, `.gif`).
@@ -88,6 +91,7 @@ impl RunOptions {
             ccw: false,
             load: None,
             motor: None,
+            spread_events: false,
             plot: None,
             animate: Vec::new(),
             fps: DEFAULT_FPS,

@@ -11,7 +11,7 @@
 
 use super::interrupt;
 use super::progress::Progress;
-use crate::error::{Fig, RunError, EXIT_FAILURE, EXIT_INTERRUPTED, EXIT_OK};
+use crate::error::{Fig, RunError, Sci, EXIT_FAILURE, EXIT_INTERRUPTED, EXIT_OK};
 use crate::model::bench::CLUTCH_EVENTS;
 use crate::model::runfile::MotorSpec;
 use crate::model::scenarios::CccScenario;
@@ -168,6 +168,9 @@ pub struct CccSummary {
     pub shaft_angle: f64,
     /// How the run ended.
     pub end: End,
+    /// With the events spread over the steps after them (`run.spread_events`): the
+    /// most the twin's time lagged the clock's `n·h` after a step, s; `None` otherwise.
+    pub lag: Option<f64>,
     /// Wall time of the whole run (stepping and files).
     pub wall: Duration,
     /// Wall time inside `Twin::step` only.
@@ -236,6 +239,14 @@ impl CccSummary {
             Fig(self.time),
             self.rows
         )?;
+        if let Some(lag) = self.lag {
+            writeln!(
+                f,
+                "spread    each event's work spread over the steps after it: the twin lagged the clock by at most {} s ({} steps)",
+                Sci(lag),
+                Fig(lag / self.h)
+            )?;
+        }
         match &self.logs {
             Some((e, s)) => writeln!(f, "logs      {e}, {s}")?,
             None => writeln!(
@@ -337,7 +348,7 @@ pub fn start_formula(s: &CccScenario) -> String {
 }
 
 /// The converter settings of `opts`: its scenario's, with the overrides `--motor`,
-/// `--load` and `--ccw`; `None` for a mechanism.
+/// `--load`, `--ccw` and `--spread-events`; `None` for a mechanism.
 pub fn settings(opts: &RunOptions) -> Option<CccScenario> {
     let mut s = opts.scenario.converter()?;
     if let Some(m) = opts.motor {
@@ -348,6 +359,9 @@ pub fn settings(opts: &RunOptions) -> Option<CccScenario> {
     }
     if opts.ccw {
         s.drive = DriveDirection::Ccw;
+    }
+    if opts.spread_events {
+        s.converter.spread_events = true;
     }
     Some(s)
 }
@@ -402,6 +416,7 @@ pub fn new_twin<T: Real>(
     params.drive = settings.drive;
     let mut ts = TwinSettings::reference(h);
     ts.clutch = settings.clutch;
+    ts.spread_events = conv.spread_events;
     // Converted as `TwinSettings::reference` does: degrees to radians in f64, then T.
     ts.crank = T::c(conv.crank_deg.to_radians());
     ts.swing = T::c(conv.swing_deg.to_radians());
@@ -483,6 +498,9 @@ pub struct Driven {
     pub switches: u64,
     /// Events with a plastic impact.
     pub impacts: u64,
+    /// The most the twin's time lagged the clock after a step, s (0 unless it spreads
+    /// its events).
+    pub lag: f64,
     /// Wall time of the whole run.
     pub wall: Duration,
     /// Wall time inside `Twin::step`.
@@ -590,6 +608,7 @@ impl Drive {
         let mut written = 0u64;
         let mut steps = 0u64;
         let mut end = End::Completed;
+        let mut lag = 0.0f64;
         let mut progress = Progress::new(self.t_end, self.quiet);
         while steps < self.n {
             if interrupt::requested() {
@@ -610,6 +629,7 @@ impl Drive {
                 break;
             }
             steps += 1;
+            lag = lag.max(twin.lag().to_f64());
             record(twin, obs)?;
             obs.on_state(State::Converter(twin));
             if steps % self.every == 0 || steps == self.n {
@@ -634,6 +654,7 @@ impl Drive {
             first_breakaway,
             switches,
             impacts,
+            lag,
             wall: start.elapsed(),
             step_wall,
         })
@@ -682,6 +703,7 @@ impl Driven {
             coords: twin.coordinates(),
             shaft_angle: twin.shaft_angle().to_f64(),
             end: self.end,
+            lag: twin.settings().spread_events.then_some(self.lag),
             wall: self.wall,
             step_wall: self.step_wall,
         }

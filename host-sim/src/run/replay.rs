@@ -410,6 +410,13 @@ pub fn simulate_with<T: Real>(
             precision::<T>()
         )));
     }
+    // `replay`'s options refuse it; a library caller is told the same.
+    if settings.converter.spread_events {
+        return Err(RunError::Setup(format!(
+            "{name}: run.spread_events = true: replay compares the twin with the log sample \
+             by sample, and a twin that spreads its events lags the log's clock after each"
+        )));
+    }
     // The run file's `motor_offset` corrects the current sensor's torque (0: as logged).
     let offset = settings.converter.motor_offset;
     let start = Inputs {

@@ -455,6 +455,10 @@ pub struct Converter {
     pub motor: MotorSpec,
     /// `run.load`: load torque T_r on the shaft, N·m (≥ 0; 0 in free mode).
     pub load: f64,
+    /// `run.spread_events`: each event's work spread over the steps after it, as a
+    /// firmware twin that must keep its worst step within the loop's period does
+    /// (`TwinSettings::spread_events`; default false).
+    pub spread_events: bool,
 }
 
 impl Converter {

@@ -217,4 +217,5 @@ pub(super) struct RawRun {
     pub(super) mode: Option<RawMode>,
     pub(super) motor: Option<toml::Value>,
     pub(super) load: Option<f64>,
+    pub(super) spread_events: Option<bool>,
 }

@@ -181,6 +181,12 @@ pub(super) fn validate(raw: RawFile, origin: &str) -> Result<RunFile, FileError>
                     ));
                 }
             }
+            if r.spread_events.is_some() {
+                return Err(ck.err(
+                    "run.spread_events",
+                    "only in a converter file (a mechanism's simulation has no events to spread)",
+                ));
+            }
             Body::Mechanism(mechanism(
                 &ck,
                 raw.gravity,
@@ -278,6 +284,7 @@ fn converter(ck: &Check<'_>, c: RawConverter, run: &RawRun) -> Result<Converter,
         clutch,
         motor,
         load,
+        spread_events: run.spread_events.unwrap_or(false),
     })
 }
 
