@@ -646,7 +646,7 @@ impl<T: Real> Twin<T> {
             w.y = ye;
             if self.settings.spread_events && !audit_event {
                 // The step ends here, evaluated in full by `Twin::end_at_event`.
-                return Ok(self.pend_choice(w, kind, false));
+                return Ok(w.pend_choice(kind, false));
             }
             // The mode choice reads the old mode's positions and speeds only (the
             // new mode is evaluated in full): no accelerations or kinetostatics.
@@ -663,7 +663,7 @@ impl<T: Real> Twin<T> {
             // A torque function is located on full evaluations; a speed function on
             // the speeds alone.
             let full = evaluated && matches!(kind, EventKind::Release(_) | EventKind::Breakaway);
-            return Ok(self.pend_choice(w, kind, full));
+            return Ok(w.pend_choice(kind, full));
         }
         self.choose(w, kind, inputs)?;
         Ok(true)

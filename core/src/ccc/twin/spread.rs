@@ -37,6 +37,18 @@ pub(super) enum Pending {
     Return,
 }
 
+impl<T: Real> Work<T> {
+    /// Ends the segment at event `kind`, located at this state, for the next step to
+    /// choose its mode ([`TwinSettings::spread_events`](super::TwinSettings::spread_events));
+    /// `full`: the location's last evaluation was a full one, at that state. Returns
+    /// `true` (the event is handled).
+    pub(super) fn pend_choice(&mut self, kind: EventKind, full: bool) -> bool {
+        self.evaluated_at_event = full;
+        self.pending = Some(Pending::Choice(kind));
+        true
+    }
+}
+
 impl<T: Real> Twin<T> {
     /// The time the step ends at: the clock's `(n + 1)·h`, or, behind it after an event,
     /// [`CATCH_UP`] steps on from its start if that is sooner and the last step was a
@@ -57,16 +69,6 @@ impl<T: Real> Twin<T> {
             T::one()
         };
         clock.min(w.t + self.settings.h * ahead)
-    }
-
-    /// Ends the segment at event `kind`, located at `w`'s state, for the next step to
-    /// choose its mode ([`TwinSettings::spread_events`](super::TwinSettings::spread_events));
-    /// `full`: the location's last evaluation was a full one, at that state. Returns
-    /// `true` (the event is handled).
-    pub(super) fn pend_choice(&self, w: &mut Work<T>, kind: EventKind, full: bool) -> bool {
-        w.evaluated_at_event = full;
-        w.pending = Some(Pending::Choice(kind));
-        true
     }
 
     /// The end of a step at the event it located: the old mode's state there evaluated
