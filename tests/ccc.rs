@@ -711,25 +711,60 @@ fn s2_at_the_loop_step_keeps_the_events_and_the_audit() {
 /// clock); the run ends on the clock.
 #[test]
 fn s2_with_spread_events_keeps_the_events_and_catches_up() {
+    let returns = check_spread_s2(|_| s2_inputs());
+    assert!(returns > 0, "S2 returns to its preferred coordinates");
+}
+
+/// The same under new inputs every step, as a firmware loop fed a measured torque
+/// has them (S2's 12 N·m given each step as a torque 1e-9 N·m up or down, alternately):
+/// the same checks, and a return to the preferred coordinates is a step of its own
+/// (one that stands) there too: under new inputs it used to fall to the end of a full
+/// step, the dearest step of the M4F's firmware loop.
+#[test]
+fn s2_with_spread_events_under_new_inputs_each_step_returns_in_steps_of_their_own() {
+    let returns = check_spread_s2(|n| Inputs {
+        motor: MotorInput::Torque(if n % 2 == 0 { 12.0 + 1e-9 } else { 12.0 - 1e-9 }),
+        ..s2_inputs()
+    });
+    assert!(returns > 0, "S2 returns to its preferred coordinates");
+}
+
+/// Runs S2's second at h = 1 ms with its events spread, step `n` (from 1) under
+/// `inputs_of(n)`, and checks it (see the tests above); returns the number of steps
+/// that stood to return to the preferred coordinates.
+fn check_spread_s2(inputs_of: impl Fn(u64) -> Inputs<f64>) -> usize {
     let a = s2(1e-4, 1.0, DriveDirection::Cw);
     let h = 1e-3;
     let mut settings = TwinSettings::reference(h);
     settings.spread_events = true;
-    let inputs = s2_inputs();
-    let mut twin = Twin::new(CccParams::reference(), settings, inputs).expect("S2 sets up");
+    let mut twin = Twin::new(CccParams::reference(), settings, inputs_of(0)).expect("S2 sets up");
     let mut events = twin.events().to_vec();
     let at_start = events.len();
     let mut max_rel = 0.0f64;
     // Each step: its start, its end, the clock, the events and the coordinate switches
-    // it logged, whether it ended in the jam.
+    // it logged, whether it ended in the jam, whether a switch it logged went to the
+    // mode's preferred coordinates (a return).
     let mut steps = Vec::new();
     for n in 1..=1000u64 {
         let t0 = twin.time();
+        let inputs = inputs_of(n);
         twin.step(&inputs).expect("a step of S2");
         check_laws(&twin, inputs.load);
         let (t, clock) = (twin.time(), n as f64 * h);
         let (logged, switched) = (twin.events().len(), twin.switches().len());
-        steps.push((t0, t, clock, logged, switched, twin.mode() == Mode::Jam));
+        let returned = twin
+            .switches()
+            .iter()
+            .any(|s| s.mode.coordinate_choices().first() == Some(&s.to));
+        steps.push((
+            t0,
+            t,
+            clock,
+            logged,
+            switched,
+            twin.mode() == Mode::Jam,
+            returned,
+        ));
         events.extend_from_slice(twin.events());
         let au = twin.audit();
         if au.motor_work > 1.0 {
@@ -737,7 +772,7 @@ fn s2_with_spread_events_keeps_the_events_and_catches_up() {
         }
     }
     let (mut choices, mut returns, mut catch_ups, mut max_lag) = (0, 0, 0, 0.0f64);
-    for (n, &(t0, t, clock, logged, switched, jam)) in steps.iter().enumerate() {
+    for (n, &(t0, t, clock, logged, switched, jam, returned)) in steps.iter().enumerate() {
         max_lag = max_lag.max(clock - t);
         let next_chooses = steps.get(n + 1).is_some_and(|s| s.0 == s.1 && s.3 > 0);
         if t == t0 {
@@ -750,9 +785,15 @@ fn s2_with_spread_events_keeps_the_events_and_catches_up() {
                 choices += 1;
             } else {
                 assert_eq!(switched, 1, "step {n} stood for nothing");
+                assert!(returned, "step {n} stood for a switch that is no return");
                 returns += 1;
             }
-        } else if next_chooses {
+            continue;
+        }
+        // A step that moves does not return to the preferred coordinates: the step
+        // before left that to a step of its own.
+        assert!(!returned, "step {n}: from {t0} s to {t} s with a return");
+        if next_chooses {
             assert!(
                 t < clock && t < t0 + h * structomat::ccc::CATCH_UP,
                 "step {n}: ended at its event at {t} s"
@@ -803,6 +844,7 @@ fn s2_with_spread_events_keeps_the_events_and_catches_up() {
         max_lag / h
     );
     assert!(worst < 1e-4, "events {worst:e} s off");
+    returns
 }
 
 /// S1 (free, 12 N·m, no load): ends at a singularity of the mechanism before 0.6 s, with

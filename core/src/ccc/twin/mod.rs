@@ -143,7 +143,9 @@ use spread::Pending;
 /// a 1 kHz loop that reads the crank's encoder and the motor's torque sensor, steps the
 /// twin with them and reads its mode and the measurement residual (with a
 /// [`TwinObserver`](crate::ccc::TwinObserver) stepping it, the twin is also corrected
-/// by the encoder). The board's
+/// by the encoder). On the M4F the twin spreads its events to keep its worst step
+/// within the period; while it is behind the clock its state is not the machine's at
+/// the sample, so there is no residual then, the lag instead. The board's
 /// functions are stubs here.
 ///
 /// ```no_run
@@ -164,13 +166,15 @@ use spread::Pending;
 /// # fn read_encoder() -> i64 { 0 }
 /// # fn read_torque_sensor() -> f32 { 12.0 }
 /// # fn report(_mode: &str, _angle_residual: f32) {}
+/// # fn report_lag(_mode: &str, _lag: f32) {}
 /// # fn report_refused(_e: &structomat::ccc::TwinStepError) {}
 ///
 /// fn main() {
 ///     // SAFETY: the one reference to TWIN, taken once by the one context that uses it.
 ///     let place = unsafe { &mut *core::ptr::addr_of_mut!(TWIN) };
 ///     let start = Inputs { motor: MotorInput::Torque(12.0), load: LOAD, measured: None };
-///     let settings = TwinSettings::reference(PERIOD);
+///     let mut settings = TwinSettings::reference(PERIOD);
+///     settings.spread_events = true;
 ///     let Ok(twin) = Twin::new_in(place, CccParams::reference(), settings, start) else {
 ///         panic!("the converter does not assemble");
 ///     };
@@ -187,8 +191,10 @@ use spread::Pending;
 ///         if let Err(e) = twin.step(&inputs) {
 ///             report_refused(&e);
 ///         }
-///         let da = twin.measurement_residual().and_then(|r| r.crank).unwrap_or(0.0);
-///         report(twin.mode().name(), da);
+///         match twin.measurement_residual().and_then(|r| r.crank) {
+///             Some(da) => report(twin.mode().name(), da),
+///             None => report_lag(twin.mode().name(), twin.lag()),
+///         }
 ///     }
 /// }
 /// ```
@@ -288,6 +294,9 @@ struct Work<T: Real> {
     /// The return to the preferred coordinates the last step left to this one failed:
     /// this step's end does not leave it to the next again.
     return_failed: bool,
+    /// The step's new inputs were taken before its integration (at a pending return,
+    /// [`Twin::settle_pending`]): the state is evaluated under them.
+    inputs_taken: bool,
     /// The step ends short of the clock ([`TwinSettings::spread_events`]).
     behind: bool,
 }
@@ -471,6 +480,7 @@ impl<T: Real> Twin<T> {
             pending: None,
             evaluated_at_event: false,
             return_failed: false,
+            inputs_taken: false,
             behind: false,
         }
     }
@@ -494,7 +504,7 @@ impl<T: Real> Twin<T> {
             1 => self.settings.h,
             n => self.settings.h / T::c(f64::from(n)),
         };
-        if changed {
+        if changed && !w.inputs_taken {
             self.new_inputs(w, inputs)?;
         }
         let mut retries = 0;
