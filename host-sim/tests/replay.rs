@@ -316,7 +316,20 @@ fn bad_logs_are_named_errors() {
     ]);
     assert_eq!(code, 2, "{err}");
     assert!(
-        err.contains("run.spread_events = true: replay compares"),
+        err.contains("run.spread_events = true: replay pairs"),
+        "{err}"
+    );
+    let (code, _, err) = run(&[
+        "identify",
+        &data("bench1.csv"),
+        "--params",
+        &spread,
+        "--out",
+        &out,
+    ]);
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("run.spread_events = true: identify pairs"),
         "{err}"
     );
     assert!(!std::path::Path::new(&out).exists());

@@ -459,17 +459,7 @@ impl ReplayArgs {
                 params.name()
             )));
         }
-        if params
-            .converter()
-            .is_some_and(|c| c.converter.spread_events)
-        {
-            return Err(usage_err(format!(
-                "--params: {}: run.spread_events = true: replay compares the twin with the \
-                 log sample by sample, and a twin that spreads its events lags the log's \
-                 clock after each (remove the key to replay)",
-                params.name()
-            )));
-        }
+        not_spreading(&params, "replay")?;
         let clutch = parse_clutch_log(self.clutch_log.as_deref())?;
         Ok(ReplayOptions {
             log,
@@ -542,6 +532,7 @@ impl IdentifyArgs {
                 params.name()
             )));
         }
+        not_spreading(&params, "identify")?;
         let clutch = parse_clutch_log(self.clutch_log.as_deref())?;
         let (fit, stages) = identifiable::parse_stages(self.fit.as_deref().unwrap_or(DEFAULT_FIT))
             .map_err(|e| usage_err(format!("--fit: {e}")))?;
@@ -679,6 +670,24 @@ fn parse_threads(value: &str) -> Result<usize, UsageError> {
 /// `--ccw`, `--load` and `--motor` apply to the converter scenarios only, and `--ccw`
 /// and `--load` not to `ccc-s1` (free mode: no clutch, no shaft load, no drive
 /// direction).
+/// A bench log's `--params` for `command` (`replay`, `identify`): not a twin that
+/// spreads its events (`run.spread_events`), whose time lags the log's clock after
+/// each: both pair the twin's state with the log's sample of the same time.
+fn not_spreading(params: &Source, command: &str) -> Result<(), UsageError> {
+    if params
+        .converter()
+        .is_some_and(|c| c.converter.spread_events)
+    {
+        return Err(usage_err(format!(
+            "--params: {}: run.spread_events = true: {command} pairs the twin with the log \
+             sample by sample, and a twin that spreads its events lags the log's clock after \
+             each (remove the key to {command})",
+            params.name()
+        )));
+    }
+    Ok(())
+}
+
 fn check_converter_options(
     scenario: &Source,
     ccw: bool,

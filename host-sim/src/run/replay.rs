@@ -413,7 +413,7 @@ pub fn simulate_with<T: Real>(
     // `replay`'s options refuse it; a library caller is told the same.
     if settings.converter.spread_events {
         return Err(RunError::Setup(format!(
-            "{name}: run.spread_events = true: replay compares the twin with the log sample \
+            "{name}: run.spread_events = true: replay pairs the twin with the log sample \
              by sample, and a twin that spreads its events lags the log's clock after each"
         )));
     }

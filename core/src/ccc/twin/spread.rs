@@ -100,9 +100,9 @@ impl<T: Real> Twin<T> {
     /// step's start does (`w.inputs_taken`), and a mode choice they call for takes the
     /// return's place. If the return does not assemble (or the mode changed) the step
     /// goes on as usual, and its end leaves no return to the next. A firmware loop fed
-    /// a measured torque has new inputs every period: without the evaluation here the
-    /// return fell to the end of a full step, the M4F's dearest step of the example's
-    /// loop (145 k Thumb-2 instructions).
+    /// a measured torque has new inputs every period: a return left to a step's end
+    /// would join a full step there (on the M4F in the firmware example, 145 k Thumb-2
+    /// instructions, the loop's dearest step).
     pub(super) fn settle_pending(
         &mut self,
         w: &mut Work<T>,
