@@ -199,6 +199,8 @@ fn converter_summary<'py>(py: Python<'py>, s: &CccSummary) -> PyResult<Bound<'py
     d.set_item("mode", s.mode.name())?;
     d.set_item("coords", s.coords.name())?;
     d.set_item("shaft_angle", s.shaft_angle)?;
+    // The twin's largest lag behind the clock, s, if it spreads its events; else None.
+    d.set_item("lag", s.lag)?;
     let (end, error) = match &s.end {
         End::Completed => ("completed", None),
         End::Stopped {

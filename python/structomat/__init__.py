@@ -54,7 +54,8 @@ class Result:
 def run(source: Union[str, "os.PathLike[str]"], **overrides: Any) -> Result:
     """Runs ``source`` (a built-in scenario's name or a run file's path) as
     ``host-sim run`` does, with the keyword ``overrides`` of its options: ``h`` (or
-    ``step``), ``t_end``, ``every``, ``f32``, ``f64``, ``motor``, ``load``, ``ccw``.
+    ``step``), ``t_end``, ``every``, ``f32``, ``f64``, ``motor``, ``load``, ``ccw``,
+    ``spread_events``.
 
     An unknown keyword is a TypeError naming it; a value host-sim refuses, a run file
     that does not read or a run that cannot be set up raise :class:`Error` with

@@ -75,6 +75,10 @@ def test_twin_spreading_its_events_equals_host_sim(host_sim, tmp_path):
         assert t.lag == t.steps * t.h - t.time
     compare_steps(twin, csv, n, step)
     assert max(lags) > 1e-3 and lags[-1] == 0.0, lags
+    # structomat.run's summary gives the largest lag, as host-sim's does.
+    r = structomat.run("ccc-s2", h=1e-3, t_end=n * 1e-3, spread_events=True)
+    assert r.summary["lag"] == max(lags)
+    assert structomat.run("ccc-s2", h=1e-3, t_end=n * 1e-3).summary["lag"] is None
 
 
 def test_twin_outputs_are_the_states_cells():
