@@ -79,6 +79,7 @@ impl<T: Real> Twin<T> {
             pending: None,
             may_catch_up: false,
             behind: false,
+            state_evaluated: false,
         };
         twin.start_at(&q, &pose, &inputs)?;
         Ok(twin)
@@ -171,6 +172,7 @@ impl<T: Real> Twin<T> {
             addr_of_mut!((*p).pending).write(None);
             addr_of_mut!((*p).may_catch_up).write(false);
             addr_of_mut!((*p).behind).write(false);
+            addr_of_mut!((*p).state_evaluated).write(false);
             place.assume_init_mut()
         }
     }
@@ -279,5 +281,6 @@ fn fields_of<T: Real>(t: &Twin<T>) {
         pending: _,
         may_catch_up: _,
         behind: _,
+        state_evaluated: _,
     } = t;
 }

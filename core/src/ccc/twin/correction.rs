@@ -201,6 +201,7 @@ impl<T: Real> Twin<T> {
         self.dp5.invalidate();
         self.last_guards = None;
         self.at_rest = false;
+        self.state_evaluated = false;
         let g0 = self.guards;
         let mut w = self.work_from_state();
         let mut result = self.move_crank(&mut w, dof, (d_theta, d_omega), before.omega, &inputs);

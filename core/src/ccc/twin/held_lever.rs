@@ -112,6 +112,7 @@ impl<T: Real> Twin<T> {
         };
         self.last_guards = None;
         self.at_rest = false;
+        self.state_evaluated = false;
         let g0 = self.guards;
         let mut w = self.work_from_state();
         let result = self.adopt_scratch(&mut w, &inputs, &q, &links);

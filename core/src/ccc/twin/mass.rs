@@ -45,6 +45,7 @@ impl<T: Real> Twin<T> {
         self.dp5.invalidate();
         self.last_guards = None;
         self.at_rest = false;
+        self.state_evaluated = false;
         let g0 = self.guards;
         let w = self.work_from_state();
         let result = self.restart_at(&w, &inputs);

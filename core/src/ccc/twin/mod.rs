@@ -250,6 +250,13 @@ pub struct Twin<T: Real> {
     may_catch_up: bool,
     /// The twin's time is behind the clock's `n·h` ([`TwinSettings::spread_events`]).
     behind: bool,
+    /// The current slot's workspace holds the full evaluation of the committed state
+    /// (an accepted step's last DP5 stage, FSAL; `tests.rs` checks it bit for bit after
+    /// every step): a step under new inputs takes its kinematics as they are and
+    /// evaluates only the loads and `q̈` anew ([`Stage::Loads`]). Taken by the step's
+    /// first attempt, set by its commit; a correction of the state between steps
+    /// clears it.
+    state_evaluated: bool,
 }
 
 /// The working state of a step, committed only when the whole step succeeds.
@@ -297,6 +304,10 @@ struct Work<T: Real> {
     /// The step's new inputs were taken before its integration (at a pending return,
     /// [`Twin::settle_pending`]): the state is evaluated under them.
     inputs_taken: bool,
+    /// The current slot's workspace holds the kinematics of the state the step starts
+    /// from ([`Twin::state_evaluated`], taken by the first attempt), until the step's
+    /// first evaluation under its new inputs.
+    state_evaluated: bool,
     /// The step ends short of the clock ([`TwinSettings::spread_events`]).
     behind: bool,
 }
@@ -434,6 +445,7 @@ impl<T: Real> Twin<T> {
         let coast = self.coast;
         self.coast_from_state(inputs.load);
         let mut w = self.work_from_state();
+        w.state_evaluated = core::mem::take(&mut self.state_evaluated);
         // Every rung but the finest may stop at an event whose state already breaks the
         // energy balance: a finer one redoes the step, its event and mode choice anyway.
         w.audit_at_events = RETRY_SUBSTEPS.last().is_some_and(|n| substeps < *n);
@@ -452,6 +464,7 @@ impl<T: Real> Twin<T> {
                 self.at_rest = w.at_rest;
                 self.pending = w.pending;
                 self.behind = w.behind;
+                self.state_evaluated = true;
                 Ok(())
             }
             Err(e) => {
@@ -481,6 +494,7 @@ impl<T: Real> Twin<T> {
             evaluated_at_event: false,
             return_failed: false,
             inputs_taken: false,
+            state_evaluated: false,
             behind: false,
         }
     }
@@ -556,7 +570,7 @@ impl<T: Real> Twin<T> {
     /// torque functions jump with the load: no earlier sample fits.
     fn new_inputs(&mut self, w: &mut Work<T>, inputs: &Inputs<T>) -> Result<(), TwinStepError> {
         self.last_guards = None;
-        self.restart_at(w, inputs)?;
+        self.restart_under_new_inputs(w, inputs)?;
         if self.settings.clutch && self.guards.any_past() {
             self.choose(w, EventKind::Inputs, inputs)?;
         }

@@ -332,29 +332,47 @@ impl<T: Real> Slot<T> {
         friction: Option<&Friction<T>>,
         shaft: T,
     ) -> Result<(), StepError> {
-        self.eval_with(t, y, inputs, (drive, friction, shaft), Angles::Record)
+        self.eval_with(t, y, inputs, (drive, friction, shaft), Some(Angles::Record))
+    }
+
+    /// [`Slot::eval`] at the kinematics the workspace holds: the motor's and the
+    /// load's torques, the losses and `q̈` only (the kinematics are a function of the
+    /// state alone: a state evaluated before under other inputs needs only this).
+    pub fn eval_loads(
+        &mut self,
+        t: T,
+        y: &SVector<T, STATE>,
+        inputs: &Inputs<T>,
+        drive: T,
+        friction: Option<&Friction<T>>,
+        shaft: T,
+    ) -> Result<(), StepError> {
+        self.eval_with(t, y, inputs, (drive, friction, shaft), None)
     }
 
     /// [`Slot::eval`], the dyads' link angles recorded or left stale (`angles`: stale
-    /// only where the motor law does not read the crank's angle, see [`Angles`]).
+    /// only where the motor law does not read the crank's angle, see [`Angles`]), or
+    /// with the kinematics the workspace holds (`None`, [`Slot::eval_loads`]).
     fn eval_with(
         &mut self,
         t: T,
         y: &SVector<T, STATE>,
         inputs: &Inputs<T>,
         (drive, friction, shaft): (T, Option<&Friction<T>>, T),
-        angles: Angles,
+        angles: Option<Angles>,
     ) -> Result<(), StepError> {
-        let n = self.map.dof.min(2);
-        let s = y.as_slice();
-        let q = s.get(..n).unwrap_or(&[]);
-        let qd = s.get(QD..QD + n).unwrap_or(&[]);
-        let angles = if inputs.motor.is_user_law() {
-            Angles::Record
-        } else {
-            angles
-        };
-        evaluate_with(&self.model, &mut self.ws, q, qd, t.to_f64(), angles)?;
+        if let Some(angles) = angles {
+            let n = self.map.dof.min(2);
+            let s = y.as_slice();
+            let q = s.get(..n).unwrap_or(&[]);
+            let qd = s.get(QD..QD + n).unwrap_or(&[]);
+            let angles = if inputs.motor.is_user_law() {
+                Angles::Record
+            } else {
+                angles
+            };
+            evaluate_with(&self.model, &mut self.ws, q, qd, t.to_f64(), angles)?;
+        }
         let crank = self
             .ws
             .body
@@ -823,7 +841,7 @@ impl<T: Real> OdeSystem<T, STATE> for Equations<'_, T> {
             y,
             self.inputs,
             (self.drive, self.friction, shaft),
-            angles,
+            Some(angles),
         )?;
         *dy = self
             .slot

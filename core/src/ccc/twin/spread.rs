@@ -115,7 +115,7 @@ impl<T: Real> Twin<T> {
                 w.behind = true;
                 if changed {
                     self.last_guards = None;
-                    self.restart_at(w, inputs)?;
+                    self.restart_under_new_inputs(w, inputs)?;
                 }
                 self.choose(w, kind, inputs)?;
                 self.settle_clutch_torques(w, inputs)?;

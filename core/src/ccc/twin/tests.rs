@@ -200,3 +200,93 @@ fn a_law_whose_coefficients_change_is_new_inputs() {
         assert_eq!(h, a, "step {k}: the asynchronous law");
     }
 }
+
+/// Step `k`'s inputs of a run.
+type InputsOf = fn(u32) -> Inputs<f64>;
+
+/// S2 at h = 1 ms, unspread and spread, under its constant law and under a torque that
+/// changes every step (12 ± 1e-3 N·m, alternately): step `k`'s inputs.
+fn s2_variants() -> [(bool, InputsOf); 4] {
+    fn law(_: u32) -> Inputs<f64> {
+        s2(1e-3).1
+    }
+    fn changing(k: u32) -> Inputs<f64> {
+        let d = if k % 2 == 0 { 1e-3 } else { -1e-3 };
+        Inputs {
+            motor: MotorInput::Torque(12.0 + d),
+            ..s2(1e-3).1
+        }
+    }
+    [
+        (false, law),
+        (false, changing),
+        (true, law),
+        (true, changing),
+    ]
+}
+
+/// S2's twin at h = 1 ms with its events spread or not.
+fn s2_spread(spread: bool) -> Box<Twin<f64>> {
+    let (twin, inputs) = s2(1e-3);
+    let mut settings = *twin.settings();
+    settings.spread_events = spread;
+    Box::new(Twin::new(CccParams::reference(), settings, inputs).unwrap())
+}
+
+/// What `Twin::state_evaluated` stands for: after every step the current slot's
+/// workspace holds the committed state's full evaluation, bit for bit the one a fresh
+/// evaluation there makes (the oracle: `Stage::Motion` at the state on a clone, the
+/// kinematics solved anew). Through S2's events, mode changes, coordinate switches and
+/// Newton groups (A68 with the crank as coordinate), spread or not.
+#[test]
+fn after_a_step_the_workspace_holds_the_committed_state() {
+    use super::evaluate::{Stage, Torques};
+    for (spread, inputs_of) in s2_variants() {
+        let mut twin = s2_spread(spread);
+        for k in 0..820 {
+            twin.step(&inputs_of(k)).unwrap();
+            assert!(twin.state_evaluated, "spread {spread}, step {k}");
+            let mut fresh = twin.clone();
+            let w = fresh.work_from_state();
+            let held = fresh.inputs.inputs();
+            fresh
+                .evaluate_from(Stage::Motion, &w, &held, Torques::Kinetostatics)
+                .unwrap();
+            let (a, b) = (&twin.slots.cur().ws, &fresh.slots.cur().ws);
+            let same = format!(
+                "{:?} {:?} {:?} {:?} {:?}",
+                a.body, a.v, a.a_bias, a.qdd, a.reactions
+            ) == format!(
+                "{:?} {:?} {:?} {:?} {:?}",
+                b.body, b.v, b.a_bias, b.qdd, b.reactions
+            );
+            assert!(
+                same,
+                "spread {spread}, step {k}, t = {}: {:?}",
+                twin.t,
+                twin.mode()
+            );
+        }
+    }
+}
+
+/// A step under new inputs evaluates only the loads and `q̈` at the kinematics the
+/// workspace holds (`Stage::Loads`): it commits the bits of a step that evaluates the
+/// state in full (the oracle: a twin whose flag is cleared before every step), step
+/// for step.
+#[test]
+fn new_inputs_at_the_kinematics_held_commit_a_full_evaluations_bits() {
+    for (spread, inputs_of) in s2_variants() {
+        let (mut reused, mut full) = (s2_spread(spread), s2_spread(spread));
+        for k in 0..820 {
+            full.state_evaluated = false;
+            reused.step(&inputs_of(k)).unwrap();
+            full.step(&inputs_of(k)).unwrap();
+            assert_eq!(
+                committed(&reused),
+                committed(&full),
+                "spread {spread}, step {k}"
+            );
+        }
+    }
+}

@@ -258,7 +258,7 @@ fn an_rrr_dyad_needs_no_warm_start() {
         y
     };
     let eval = |slot: &mut Slot<f64>, dq: f64, a: Angles| {
-        slot.eval_with(0.0, &state(dq), &inputs, (1.0, None, 0.0), a)
+        slot.eval_with(0.0, &state(dq), &inputs, (1.0, None, 0.0), Some(a))
             .unwrap();
         let mut m: std::vec::Vec<u64> = slot.ws.qdd.iter().map(|v| v.to_bits()).collect();
         for b in slot.ws.body.iter() {
@@ -329,7 +329,7 @@ fn stale_angles_change_nothing_but_the_angles() {
             y
         };
         let eval = |slot: &mut Slot<f64>, dq: f64, inputs: &Inputs<f64>, a: Angles| {
-            slot.eval_with(0.0, &state(dq), inputs, (1.0, None, 0.0), a)
+            slot.eval_with(0.0, &state(dq), inputs, (1.0, None, 0.0), Some(a))
                 .unwrap();
         };
         eval(&mut slot, -0.002, &constant, Angles::Record);
