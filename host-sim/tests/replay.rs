@@ -306,32 +306,19 @@ fn bad_logs_are_named_errors() {
     let spread = dir.join("spread.toml");
     let s2 = include_str!("../scenarios/ccc-s2.toml");
     std::fs::write(&spread, format!("{s2}spread_events = true\n")).unwrap();
-    let (code, _, err) = run(&[
-        "replay",
-        &data("bench1.csv"),
-        "--params",
-        &spread,
-        "--out",
-        &out,
-    ]);
-    assert_eq!(code, 2, "{err}");
-    assert!(
-        err.contains("run.spread_events = true: replay pairs"),
-        "{err}"
-    );
-    let (code, _, err) = run(&[
-        "identify",
-        &data("bench1.csv"),
-        "--params",
-        &spread,
-        "--out",
-        &out,
-    ]);
-    assert_eq!(code, 2, "{err}");
-    assert!(
-        err.contains("run.spread_events = true: identify pairs"),
-        "{err}"
-    );
+    for command in ["replay", "identify"] {
+        let (code, _, err) = run(&[
+            command,
+            &data("bench1.csv"),
+            "--params",
+            &spread,
+            "--out",
+            &out,
+        ]);
+        assert_eq!(code, 2, "{command}: {err}");
+        let why = format!("run.spread_events = true: {command} pairs");
+        assert!(err.contains(&why), "{command}: {err}");
+    }
     assert!(!std::path::Path::new(&out).exists());
     // The output may not be an input.
     let copy = dir.join("log.csv");

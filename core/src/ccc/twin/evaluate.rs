@@ -13,6 +13,7 @@ use super::{Twin, Work};
 use crate::dynamics::finish_accelerations;
 use crate::kinetostatics::reactions;
 use crate::scalar::Real;
+use crate::structomat::Angles;
 
 /// A stage of the evaluation of a slot, in order: each runs after those before it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
@@ -73,10 +74,8 @@ impl<T: Real> Twin<T> {
         inputs: &Inputs<T>,
         torques: Torques<'_, T>,
     ) -> Result<TorqueSource, TwinStepError> {
-        if stage <= Stage::Motion {
-            self.stage_motion(w, inputs)?;
-        } else if stage <= Stage::Loads {
-            self.stage_loads(w, inputs)?;
+        if stage <= Stage::Loads {
+            self.stage_motion(w, inputs, stage == Stage::Motion)?;
         }
         if stage <= Stage::Accelerations {
             let slot = self.slots.cur_mut();
@@ -99,34 +98,20 @@ impl<T: Real> Twin<T> {
         Ok(self.readout(&links, inputs, kept, w.t))
     }
 
-    /// [`Stage::Motion`]: the slot's equations of motion at `w`'s state.
-    fn stage_motion(&mut self, w: &Work<T>, inputs: &Inputs<T>) -> Result<(), TwinStepError> {
+    /// [`Stage::Motion`]: the slot's equations of motion at `w`'s state, its
+    /// `kinematics` solved, or ([`Stage::Loads`]) as the workspace holds them.
+    fn stage_motion(
+        &mut self,
+        w: &Work<T>,
+        inputs: &Inputs<T>,
+        kinematics: bool,
+    ) -> Result<(), TwinStepError> {
+        let friction = self.lossy.then_some(&self.params.friction);
+        let loads = (self.drive, friction, self.coast.omega_at(w.t));
+        let angles = kinematics.then_some(Angles::Record);
         self.slots
             .cur_mut()
-            .eval(
-                w.t,
-                &w.y,
-                inputs,
-                self.drive,
-                self.lossy.then_some(&self.params.friction),
-                self.coast.omega_at(w.t),
-            )
-            .map_err(|e| self.physical_error(e))
-    }
-
-    /// [`Stage::Loads`]: the slot's loads and `q̈` at `w`'s state, whose kinematics the
-    /// workspace holds.
-    fn stage_loads(&mut self, w: &Work<T>, inputs: &Inputs<T>) -> Result<(), TwinStepError> {
-        self.slots
-            .cur_mut()
-            .eval_loads(
-                w.t,
-                &w.y,
-                inputs,
-                self.drive,
-                self.lossy.then_some(&self.params.friction),
-                self.coast.omega_at(w.t),
-            )
+            .eval_with(w.t, &w.y, inputs, loads, angles)
             .map_err(|e| self.physical_error(e))
     }
 

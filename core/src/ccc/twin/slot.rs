@@ -335,25 +335,12 @@ impl<T: Real> Slot<T> {
         self.eval_with(t, y, inputs, (drive, friction, shaft), Some(Angles::Record))
     }
 
-    /// [`Slot::eval`] at the kinematics the workspace holds: the motor's and the
-    /// load's torques, the losses and `q̈` only (the kinematics are a function of the
-    /// state alone: a state evaluated before under other inputs needs only this).
-    pub fn eval_loads(
-        &mut self,
-        t: T,
-        y: &SVector<T, STATE>,
-        inputs: &Inputs<T>,
-        drive: T,
-        friction: Option<&Friction<T>>,
-        shaft: T,
-    ) -> Result<(), StepError> {
-        self.eval_with(t, y, inputs, (drive, friction, shaft), None)
-    }
-
     /// [`Slot::eval`], the dyads' link angles recorded or left stale (`angles`: stale
     /// only where the motor law does not read the crank's angle, see [`Angles`]), or
-    /// with the kinematics the workspace holds (`None`, [`Slot::eval_loads`]).
-    fn eval_with(
+    /// at the kinematics the workspace holds (`None`: the motor's and the load's
+    /// torques, the losses and `q̈` only; the kinematics are a function of the state
+    /// alone, so a state evaluated before under other inputs needs only these).
+    pub(super) fn eval_with(
         &mut self,
         t: T,
         y: &SVector<T, STATE>,
