@@ -13,6 +13,7 @@ use super::{
 use crate::error::{usage_err, Sci, UsageError};
 use crate::model::bench::{BenchLog, ClutchLog};
 use crate::model::identifiable::{self, DEFAULT_FIT, DEFAULT_MAX_ITERS, MAX_ITERS};
+use crate::model::runfile::spreading_refused;
 use crate::model::runfile::MAX_CONVERTER_LOAD;
 use crate::model::scenarios::{ScenarioId, Source};
 use clap::{Args, Parser};
@@ -671,19 +672,14 @@ fn parse_threads(value: &str) -> Result<usize, UsageError> {
 /// and `--load` not to `ccc-s1` (free mode: no clutch, no shaft load, no drive
 /// direction).
 /// A bench log's `--params` for `command` (`replay`, `identify`): not a twin that
-/// spreads its events (`run.spread_events`), whose time lags the log's clock after
-/// each: both pair the twin's state with the log's sample of the same time.
+/// spreads its events ([`spreading_refused`]).
 fn not_spreading(params: &Source, command: &str) -> Result<(), UsageError> {
     if params
         .converter()
         .is_some_and(|c| c.converter.spread_events)
     {
-        return Err(usage_err(format!(
-            "--params: {}: run.spread_events = true: {command} pairs the twin with the log \
-             sample by sample, and a twin that spreads its events lags the log's clock after \
-             each (remove the key to {command})",
-            params.name()
-        )));
+        let why = spreading_refused(params.name(), command);
+        return Err(usage_err(format!("--params: {why}")));
     }
     Ok(())
 }

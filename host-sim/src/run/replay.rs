@@ -23,6 +23,7 @@ use super::observed::{self, ObservedSummary, OBSERVER_COLUMNS};
 use super::{overwritten, to_files};
 use crate::error::{report_run_error, usage_err, Fig, RunError};
 use crate::model::bench::{encoder_counts, BenchLog, ClutchEvent, ClutchLog, COUNTS_PER_TURN};
+use crate::model::runfile::spreading_refused;
 use crate::model::scenarios::{CccScenario, Source};
 use crate::options::{precision, ObserverTuning, ReplayOptions};
 use crate::output::{Cell, Observer};
@@ -410,12 +411,9 @@ pub fn simulate_with<T: Real>(
             precision::<T>()
         )));
     }
-    // `replay`'s options refuse it; a library caller is told the same.
+    // `replay`'s and `identify`'s options refuse it; a library caller is told the same.
     if settings.converter.spread_events {
-        return Err(RunError::Setup(format!(
-            "{name}: run.spread_events = true: replay pairs the twin with the log sample \
-             by sample, and a twin that spreads its events lags the log's clock after each"
-        )));
+        return Err(RunError::Setup(spreading_refused(name, "replay")));
     }
     // The run file's `motor_offset` corrects the current sensor's torque (0: as logged).
     let offset = settings.converter.motor_offset;

@@ -159,6 +159,7 @@ impl<T: Real> Twin<T> {
     /// [`Twin::restart_at`] under new inputs at the state the step starts from: the
     /// kinematics as the workspace holds them if it holds the state's
     /// (`w.state_evaluated`, the last step's end), only the loads and `q̈` anew. The
+    /// torque functions jump with the inputs: no earlier sample of them fits. The
     /// same bits as a full evaluation (the kinematics are a function of the state);
     /// S2 in f64 at h = 1 ms under a torque that changes every step: 11.8k x86_64
     /// instructions a step more than under a constant one, of which this spares
@@ -168,6 +169,7 @@ impl<T: Real> Twin<T> {
         w: &mut Work<T>,
         inputs: &Inputs<T>,
     ) -> Result<(), TwinStepError> {
+        self.last_guards = None;
         let stage = if core::mem::take(&mut w.state_evaluated) {
             Stage::Loads
         } else {

@@ -566,10 +566,8 @@ impl<T: Real> Twin<T> {
         Ok(t_end)
     }
 
-    /// Inputs changed: re-evaluates at `w` and sees whether the mode still holds. The
-    /// torque functions jump with the load: no earlier sample fits.
+    /// Inputs changed: re-evaluates at `w` and sees whether the mode still holds.
     fn new_inputs(&mut self, w: &mut Work<T>, inputs: &Inputs<T>) -> Result<(), TwinStepError> {
-        self.last_guards = None;
         self.restart_under_new_inputs(w, inputs)?;
         if self.settings.clutch && self.guards.any_past() {
             self.choose(w, EventKind::Inputs, inputs)?;

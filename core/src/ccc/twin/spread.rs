@@ -114,7 +114,6 @@ impl<T: Real> Twin<T> {
             Some(Pending::Choice(kind)) => {
                 w.behind = true;
                 if changed {
-                    self.last_guards = None;
                     self.restart_under_new_inputs(w, inputs)?;
                 }
                 self.choose(w, kind, inputs)?;

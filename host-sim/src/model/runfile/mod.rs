@@ -461,6 +461,17 @@ pub struct Converter {
     pub spread_events: bool,
 }
 
+/// Why `command` (`replay`, `identify`) refuses the converter `name` whose run file sets
+/// `run.spread_events`: it pairs the twin's state with the log's sample of the same
+/// time, and a twin that spreads its events lags the log's clock after each.
+pub fn spreading_refused(name: &str, command: &str) -> String {
+    format!(
+        "{name}: run.spread_events = true: {command} pairs the twin with the log sample by \
+         sample, and a twin that spreads its events lags the log's clock after each \
+         (remove the key to {command})"
+    )
+}
+
 impl Converter {
     /// The parameters in scalar `T` (each value converted once, as the core's
     /// `CccParams::reference` does).
