@@ -324,7 +324,7 @@ impl<T: Real> Twin<T> {
         // Set again by a step committed at rest.
         self.at_rest = false;
         let changed = !same_inputs(&self.inputs, inputs);
-        let mut saved = WarmStart::EMPTY;
+        let mut saved = WarmStart::new();
         self.slots.cur().save_warm_start(&mut saved);
         // The last good step's log: an attempt rewrites it. Its events and switches
         // are copied only if there are any (after most steps there are none: the
