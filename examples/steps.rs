@@ -20,7 +20,7 @@
 //!
 //! ```sh
 //! valgrind --tool=callgrind --collect-atstart=no --toggle-collect='*measured*' \
-//!     target/release/examples/steps twin-f64-at 667
+//!     target/release/examples/steps twin-f64-at 666
 //! ```
 //!
 //! `twin-f32-at` and `twin-f32-log` are the same in f32; `STEPS_H=1e-3` in the

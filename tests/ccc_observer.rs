@@ -247,7 +247,7 @@ fn a_correction_moves_the_crank_and_books_its_energy() {
 /// here, move with the counts; measured 0.98 counts in f64 and 0.99 in f32, 1.52 and
 /// 1.64 before the locked lever's update, 2.85 and 2.61 with the four-state tuning,
 /// 7.8 and 7.5 before the friction's estimate; see
-/// the README's observer paragraph). Tuned for an identified twin (a model trusted),
+/// docs/observer.md, "Machines with one known error"). Tuned for an identified twin (a model trusted),
 /// within half a count: measured 0 in f64 (the counts never leave the twin's band, so
 /// it is never corrected) and 0.15 in f32.
 #[test]

@@ -179,7 +179,7 @@ fn bench1_observed_from_5_degrees_off_follows_the_machine_s_sequence() {
 /// 21 (the first release 7.5 ms early, at 9.1 ms, while the filter settles from the
 /// first count; a catch6 1.9 ms early; the jam's catch 2.2 ms late after a creep in
 /// I6 at 0.4 rad/s). (The 400/12 log of the same machine leaves the machine's
-/// sequence at its 32nd event, 0.92 s: README, "The observer".)
+/// sequence at its 32nd event, 0.92 s: docs/observer.md, "The known machine's logs".)
 #[test]
 fn the_observer_keeps_a_known_machine_s_sequence_at_other_operating_points() {
     let dir = TempDir::new("observe-known");
@@ -251,7 +251,7 @@ fn the_identified_tuning_follows_an_identified_twin_s_machine() {
 /// the 600/12 sequence parted at 0.55 s (a torque estimate learnt in A68 held through
 /// the crank's reversal in the next I6 phase, where nothing else corrects it). At
 /// 400/12 the observed twin still parts at 0.92 s, where open loop keeps the sequence
-/// with no event more than 0.84 ms off (README, "An identified twin a little off").
+/// with no event more than 0.84 ms off (docs/observer.md, "A twin a little off").
 #[test]
 fn an_identified_twin_a_little_off_follows_its_machine() {
     let dir = TempDir::new("observe-identified-off");

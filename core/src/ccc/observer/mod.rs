@@ -58,7 +58,7 @@
 //! On bench1 with SPEC's nominal parameters it settles at 0.03 N·m·s/rad from 0.1 s
 //! on, `d` at -1.2 to -1.4 N·m while the machine turns (`identify` finds 0.050 at A
 //! and 0.010 at B, E and F): the two share the friction's torque, `d` its mean part
-//! (README, "The observer"). The identified tuning has it off (an identified twin has
+//! (docs/observer.md). The identified tuning has it off (an identified twin has
 //! its friction), and so the three-state filter's bits.
 //!
 //! The mass observer. The heaviest part of the machine, the oscillating mass on the
