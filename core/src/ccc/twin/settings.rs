@@ -145,9 +145,9 @@ pub const ENERGY_TOL_STEP: f64 = 1e-4;
 /// the motor's power), largest in smooth stretches of fast motion (I0 before a catch,
 /// A68 before a release), not at events. Undivided, S2's audit at 1e-3 s ends at
 /// 1.6e-6 of the motor work (past issue 18's 1e-6): the check is needed. With 1e-8 it
-/// ends at 8.7e-8, the events the same as at 1e-4 s within 1e-7 s; 32 undivided jumps
-/// pass 1e-8, and 4 sub-steps divide a jump by about 4⁵ = 1024, under 1e-8 for the
-/// largest. At h ≤ 1e-4 s, and in f32 at any h under 12 s, the tolerance is the core's.
+/// ends at 1.0e-7, the events the same as at 1e-4 s within 7.4e-9 s; 27 steps take
+/// sub-steps (2 to 4), and 4 sub-steps divide a jump by about 4⁵ = 1024, under 1e-8 for
+/// the largest. At h ≤ 1e-4 s, and in f32 at any h under 12 s, the tolerance is the core's.
 pub fn energy_tolerance<T: Real>(h: T) -> T {
     let per_time = (h / T::c(ENERGY_TOL_STEP)).max(T::one());
     (T::c(balance::ENERGY_TOL) * per_time).max(balance::tolerance())
