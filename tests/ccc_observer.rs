@@ -269,8 +269,10 @@ fn with_no_model_error_the_observer_keeps_the_machine_s_events() {
         }
         eprintln!("{worst} counts off the machine at worst");
         assert!(worst <= bound, "{worst} counts off the machine");
+        // Regression value: S2's 23 events to 1 s, as the twin makes them; the
+        // oracle is the pairing below, ours against the machine's, one by one.
         assert_eq!(theirs.len(), 23, "S2's events");
-        assert_eq!(ours.len(), 23);
+        assert_eq!(ours.len(), theirs.len());
         for (a, b) in theirs.iter().zip(&ours) {
             assert_eq!((a.1, a.2), (b.1, b.2));
             assert!((a.0 - b.0).abs() <= 0.01, "{a:?} {b:?}");

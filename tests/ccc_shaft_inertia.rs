@@ -105,6 +105,7 @@ fn a_coasting_shaft_with_no_load_keeps_its_energy() {
     println!(
         "no load: {stretches} coasting stretches, {coasting_steps} steps, energy kept to {worst:.3e}"
     );
+    // Regression bounds (measured: 5 stretches, 2284 steps): the shaft does coast.
     assert!(stretches >= 3 && coasting_steps >= 100);
     assert!(worst <= 1e-9, "{worst}");
 }
@@ -201,6 +202,7 @@ fn with_every_loss_and_shaft_inertia_the_audit_closes() {
     println!(
         "spun up, J_s = 0.5, T_r = 100 N·m, every loss: {steps} coasting steps, residual {coast:.3e}; {a:?}"
     );
+    // A regression bound (as measured, more): the shaft does coast.
     assert!(steps >= 10, "{steps} coasting steps");
     assert!(coast <= 1e-6, "{coast}");
 }

@@ -242,6 +242,7 @@ fn a_huge_step_fails_with_the_energy_balance_error() {
     let StepError::EnergyBalance { substeps, .. } = e else {
         panic!("not the energy-balance error: {e}");
     };
+    // The finest rung: the core's sub-steps are 4 then 16 (`balance::SUBSTEPS`).
     assert_eq!(substeps, 16, "{e}");
     assert_reads(&e, substeps);
 }
@@ -343,6 +344,7 @@ fn random_four_bars_keep_their_balance() {
         assert!(sim.kinetostatics().is_ok(), "case {case}");
     }
     println!("{completed} runs completed, {stopped} stopped");
+    // A regression bound (as measured, more complete): the checks above see whole runs.
     assert!(completed >= 20, "{completed} runs completed");
 }
 

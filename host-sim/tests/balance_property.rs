@@ -273,5 +273,7 @@ fn accepted_runs_keep_the_energy_balance_and_finite_csvs() {
         );
     }
     eprintln!("{passed} of 200 runs exited 0; worst |residual| / work {worst:.1e}");
+    // A regression bound (as measured, more pass): most random runs reach their end,
+    // so the balance above is checked on whole runs.
     assert!(passed >= 120, "only {passed} of 200 random runs passed");
 }

@@ -77,6 +77,7 @@ fn alternative_drives(t: f64, switches: &[f64]) -> bool {
 /// The checks common to both mechanisms; `motor_law` the torque (force) of the motor
 /// at the first coordinate's rate.
 fn check(csv: &Csv, switches: &[f64], motor_law: impl Fn(f64) -> f64, reaction: &str) {
+    // A regression bound (as measured, at least these): the run passes dead points.
     assert!(switches.len() >= 4, "switches at {switches:?}");
     let (t, qd, qdd) = (csv.col("t"), csv.col("qd1"), csv.col("qdd1"));
     let (motor, drive, r) = (
@@ -123,6 +124,7 @@ fn check(csv: &Csv, switches: &[f64], motor_law: impl Fn(f64) -> f64, reaction: 
             row[qd]
         );
     }
+    // A regression bound (as measured, more): the alternatives drive for a while.
     assert!(driven > 20, "{driven} rows with an alternative driving");
     // q̈ against the central difference of q̇: the difference's error is h²/6 q̇''' and
     // q̇''' is bounded by the third difference of q̇ over h³ nearby (all from the q̇

@@ -115,7 +115,8 @@ fn assert_balance_closed(sim: &Simulation<f64>) {
 #[test]
 fn piston_driven_slider_crank_passes_its_dead_centres() {
     let (a, switches, sim) = run(PISTON, 1e-3, 1.0, 0.05);
-    // Each dead centre is one switch away from the piston and one back.
+    // Each dead centre is one switch away from the piston and one back. A regression
+    // bound (as measured, the run makes at least these): it passes its dead centres.
     assert!(switches >= 6, "{switches} switches");
     assert_balance_closed(&sim);
     // The piston's position against the closed form of the crank angle at the end.
@@ -137,6 +138,7 @@ fn piston_driven_slider_crank_passes_its_dead_centres() {
 #[test]
 fn rocker_driving_a_triad_passes_its_dead_points() {
     let (a, switches, sim) = run(TRIAD, 1e-3, 2.5, 0.05);
+    // A regression bound (as measured, at least these): it passes its dead points.
     assert!(switches >= 8, "{switches} switches");
     assert_balance_closed(&sim);
     // The rocker's angle stays in its swing, [-75.86°, -21.02°] (the four-bar
@@ -182,6 +184,7 @@ fn no_other_coordinate_ends_with_a_dead_point_error() {
             && text.contains(&format!("t = {time:.6} s")),
         "{text}"
     );
-    // The first dead centre of the run with alternatives comes at 0.13 s.
+    // The first dead centre of the run with alternatives comes at 0.13 s (a
+    // regression bracket, as measured).
     assert!(time > 0.1 && time < 0.2, "{time}");
 }

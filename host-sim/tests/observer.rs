@@ -88,6 +88,8 @@ fn a_converter_run_tells_every_state_row_and_log_line() {
     assert_eq!(s.steps, 100);
     assert_eq!((count.converter_states, count.mechanism_states), (101, 0));
     assert_eq!((count.rows, s.rows), (16, 16));
+    // Regression values: the converter CSV's 46 columns and the event and switch
+    // logs' 8 and 6, as the headers are (host-sim/scenarios/README.md lists them).
     assert_eq!(count.columns, 46);
     assert_eq!(count.log_widths, [8, 6]);
     assert_eq!(count.events, [s.event_count(), s.switches]);

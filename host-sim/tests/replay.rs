@@ -63,6 +63,8 @@ fn a_log_the_twin_wrote_replays_to_the_same_machine() {
     let log_path = dir.join("s2-log.csv");
     std::fs::write(&log_path, log).unwrap();
     let run_events = events(&dir.join("s2.events.csv"));
+    // Regression value: S2's 23 events to t = 1 s, as the twin makes them (the
+    // oracle of this test is the replay against the run that wrote the log).
     assert_eq!(run_events.len(), 23, "S2's 23 events to t = 1 s");
     let mut clutch = String::from("t,event,from,to\n");
     for e in &run_events {
@@ -123,6 +125,9 @@ fn bench1_replays_as_the_issue_states() {
         (bench.time - 0.02687).abs() < 5e-6,
         "issue: bench 0.02687 s"
     );
+    // Issue 19's twin figures (0.02876 s, 23 events, the jam at 0.8185 s) are the
+    // twin's own output, quoted in the issue: regression values. The machine's (the
+    // bench log's 0.02687 s, 21 events, 0.33 s, 0.8367 s) are the oracle.
     // Issue: twin 0.02876 s, S2's twin under a constant 12 N·m. The replay holds the
     // log's measured torque (sensor noise of about 0.05 N·m) over each step: the
     // lever's transmitted torque, whose zero is the release, follows the motor torque
@@ -211,6 +216,7 @@ fn bench1_at_a_constant_torque_is_s2() {
         events(&dir.join("s2.events.csv")),
     );
     assert_eq!(replayed, ran);
+    // Regression values (issue 19's twin figures, the twin's own output).
     assert_eq!(replayed.len(), 23, "issue: the twin makes 23 events");
     let first: f64 = replayed[0][0].parse().unwrap();
     assert!((first - 0.02876).abs() < 5e-6, "issue: twin 0.02876 s");

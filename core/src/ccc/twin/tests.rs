@@ -59,6 +59,7 @@ fn s2_at_rest() -> (Box<Twin<f64>>, Inputs<f64>) {
     }
     assert!(twin.at_rest, "S2 jams before 1 s");
     assert_eq!(twin.slots.cur().mode, Mode::Jam);
+    // Regression bracket around S2's jam, 0.8185 s as measured.
     assert!(twin.time() > 0.8 && twin.time() < 0.83, "{}", twin.time());
     (twin, inputs)
 }
@@ -130,6 +131,8 @@ fn a_predicted_first_rung_commits_the_ladders_bits() {
     for _ in 0..262 {
         twin.step(&inputs).unwrap();
     }
+    // Regression value: the rung the last steps' jumps predict, 4, as measured (the
+    // oracle is the bit comparison below).
     assert_eq!(twin.jumps.start_rung(), 4);
     let mut ladder = Box::new((*twin).clone());
     ladder.jumps = super::rungs::JumpHistory::NONE;
