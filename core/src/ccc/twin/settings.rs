@@ -140,7 +140,7 @@ pub const ENERGY_TOL_STEP: f64 = 1e-4;
 ///
 /// DP5's energy error per step grows as h⁶, so at h = 1e-3 s a fixed 1e-9 redid 59 of
 /// S2's 1000 steps (jumps of up to 1.35e-6 undivided) in sub-steps for an audit of
-/// 1.1e-8 of the motor work, where h = 1e-4 s keeps 2.5e-11 without redoing any. The
+/// 1.1e-8 of the motor work, where h = 1e-4 s keeps 2.4e-11 without redoing any. The
 /// jumps are the integrator's own error (the physical energy against the quadrature of
 /// the motor's power), largest in smooth stretches of fast motion (I0 before a catch,
 /// A68 before a release), not at events. Undivided, S2's audit at 1e-3 s ends at
