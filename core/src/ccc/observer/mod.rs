@@ -55,9 +55,10 @@
 //! [`ObserverSettings::friction_limit`] (friction takes energy), updated where `d` is,
 //! and it stands for whatever of the model's error goes with the crank's speed, not
 //! only A's (the friction of B and E, seen at the crank, follows its speed too).
-//! On bench1 with SPEC's nominal parameters it settles at 0.03 N·m·s/rad from 0.1 s
-//! on, `d` at -1.2 to -1.4 N·m while the machine turns (`identify` finds 0.050 at A
-//! and 0.010 at B, E and F): the two share the friction's torque, `d` its mean part
+//! On bench1 with SPEC's nominal parameters it stays at 0.037 to 0.049 N·m·s/rad from
+//! 0.1 s on (0.046 at the end), `d` at about -0.9 to -1.0 N·m in A68 and I6 and -0.2 to
+//! -0.4 late in the run (`identify` finds 0.050 at A and 0.010 at B, E and F): the two
+//! share the friction's torque, `d` its mean part
 //! (docs/observer.md). The identified tuning has it off (an identified twin has
 //! its friction), and so the three-state filter's bits.
 //!

@@ -104,12 +104,13 @@ use spread::Pending;
 /// (32.0 KiB) on x86_64: three slots, each a model and a workspace sized for the
 /// converter; the mode choice builds its reference model in the one it leaves free
 /// (the core asserts the budgets at compile time: 64 KiB and 32 KiB). A step's
-/// stack high-water is about 10.7 KiB in f64 and 7.9 KiB in f32 on x86_64 in release
+/// stack high-water is about 10.7 KiB in f64 and 8.0 KiB in f32 on x86_64 in release
 /// (S2, events included), 12.2 and 8.1 KiB painted on the Cortex-M boards.
 ///
 /// **Step sizes.** h = 1e-4 s is the reference in f64 (S2's events within 1e-6 s of
-/// h = 5e-5 s); h = 2e-4 s is the recommended f32 step (the largest with no step
-/// redone in sub-steps on S2, half the work of 1e-4 s).
+/// h = 5e-5 s); h = 2e-4 s is the recommended f32 step (S2's crank within 7.5e-6 rad of
+/// f64's at 0.5 s where 1 ms is 1.9e-4 rad off, half the work of 1e-4 s; f32's error is
+/// rounding, and up to h = 1 ms no f32 step of S2 is redone in sub-steps).
 ///
 /// **In firmware** the twin is far too large for a stack: it lives in a `static` and is
 /// built there by [`Twin::new_in`], which initialises it in place (construction needs
