@@ -10,6 +10,8 @@ import collections
 import re
 import sys
 
+from calls import helper_calls
+
 symbols_path, blocks_path, log_path, top = sys.argv[1], sys.argv[2], sys.argv[3], int(sys.argv[4])
 disassembly = sys.argv[5] if len(sys.argv) > 5 else None
 
@@ -62,31 +64,13 @@ for name, n in own.most_common(top):
     print(f"{n:12,} {100 * n / total:5.1f}%  {short(name)}")
 
 if disassembly:
-    # A call ends its block: the executions of the blocks whose last instruction it
-    # is are the call's.
-    helpers = ("__aeabi_memcpy", "__aeabi_memclr", "__aeabi_memset", "__aeabi_memmove",
-               "memcpy", "memset", "memmove")
-    call = re.compile(r"^\s*([0-9a-f]+):.*\bbl\s+0x[0-9a-f]+ <([^>]+)>")
-    # The size's register: r2 for the copies (dest, src, n), r1 for the AEABI clears
-    # and sets (dest, n[, c]).
-    size = {r: re.compile(rf"\b(?:movs?|mov\.w|movw)\s+{r}, #(\d+)") for r in ("r1", "r2")}
-    recent = collections.deque(maxlen=6)
     sites = collections.Counter()
     by_bytes = collections.Counter()
-    for line in open(disassembly):
-        m = call.match(line)
-        if m and m.group(2).startswith(helpers):
-            addr, helper = int(m.group(1), 16), m.group(2)
-            n = runs_to.get(addr, 0)
-            if n:
-                reg = "r1" if helper.startswith(("__aeabi_memclr", "__aeabi_memset")) else "r2"
-                sized = [int(x) for x in size[reg].findall(" ".join(recent))]
-                nbytes = sized[-1] if sized else 0
-                caller = names[function_of(addr)] if function_of(addr) >= 0 else "?"
-                key = (short(caller, 70), helper)
-                sites[key] += n
-                by_bytes[key] += n * nbytes
-        recent.append(line)
+    for addr, helper, n, nbytes in helper_calls(disassembly, runs_to):
+        caller = names[function_of(addr)] if function_of(addr) >= 0 else "?"
+        key = (short(caller, 70), helper)
+        sites[key] += n
+        by_bytes[key] += n * nbytes
     print()
     print(f"{'calls':>10} {'bytes':>13}  helper  <- caller (bytes: the size's immediate, 0 if none)")
     for key, b in sorted(by_bytes.items(), key=lambda kv: (-kv[1], -sites[kv[0]]))[:top]:

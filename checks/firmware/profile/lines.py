@@ -17,6 +17,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+from calls import helper_calls
+
 elf, dis_path, blocks_path, top = sys.argv[1], sys.argv[2], sys.argv[3], int(sys.argv[4])
 prefix = sys.argv[5] if len(sys.argv) > 5 else str(Path(__file__).resolve().parents[3]) + "/"
 
@@ -71,26 +73,9 @@ print(f"{'own':>12} {'share':>6}  innermost line of the project's code")
 for loc, n in lines.most_common(top):
     print(f"{n:12,} {100 * n / total:5.1f}%  {loc}")
 
-# The memory helpers' calls by site: a call ends its block, so the executions of the
-# blocks ending at the call are the call's; the size is the immediate last moved into
-# r2 (copies: dest, src, n) or r1 (AEABI clears and sets: dest, n).
-helpers = ("__aeabi_memcpy", "__aeabi_memclr", "__aeabi_memset", "__aeabi_memmove",
-           "memcpy", "memset", "memmove")
-call = re.compile(r"^\s*([0-9a-f]+):.*\bbl\s+0x[0-9a-f]+ <([^>]+)>")
-size = {r: re.compile(rf"\b(?:movs?|mov\.w|movw)\s+{r}, #(\d+)") for r in ("r1", "r2")}
-recent = collections.deque(maxlen=6)
-sites = []
-for line in open(dis_path):
-    m = call.match(line)
-    if m and m.group(2).startswith(helpers):
-        addr, helper = int(m.group(1), 16), m.group(2)
-        n = runs_to.get(addr, 0)
-        if n:
-            reg = "r1" if helper.startswith(("__aeabi_memclr", "__aeabi_memset")) else "r2"
-            sized = [int(x) for x in size[reg].findall(" ".join(recent))]
-            nbytes = sized[-1] if sized else 0
-            sites.append((n * nbytes, n, nbytes, addr, helper))
-    recent.append(line)
+# The memory helpers' calls by site.
+sites = [(n * nbytes, n, nbytes, addr, helper)
+         for addr, helper, n, nbytes in helper_calls(dis_path, runs_to)]
 sites.sort(reverse=True)
 located = frames([s[3] for s in sites[:top]])
 print()
