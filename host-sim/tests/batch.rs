@@ -248,7 +248,7 @@ five-bar --out x.csv
 /// An end at a singularity of the mechanism has one exit status, whichever scenario
 /// meets it (issue 17, item 4): `ccc-s1` (free mode, the diode rods in line at 0.324 s)
 /// and `ccc-s2 --load 0` (nothing holds the shaft: both diode branches stretched at
-/// 0.3238 s) and a general mechanism, `mechanisms/stretched-four-bar.toml` (its coupler
+/// 0.3239 s) and a general mechanism, `mechanisms/stretched-four-bar.toml` (its coupler
 /// and rocker stretch in line at t* = acos 0.65 s), all end "singularity" with exit 0,
 /// in the batch's table and alone (on the code before, `ccc-s2 --load 0` and the
 /// four-bar exited 1 with "step failed").

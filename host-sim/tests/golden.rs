@@ -87,7 +87,7 @@ const PINS: &[Pin<'static>] = &[
     Pin {
         args: "ccc-s1",
         exit: 0,
-        csv: "ea23442c383fd10d5c2a0201704d773e0b5f0a7718780fe7597ef6df611b009a",
+        csv: "8b5ca62e33704427c28928cde8fbf2348ddc1258c08470160933211332c0a984",
         logs: Some((
             "2a18d19a58b935cc5a81a088e9c456f81ad855f74a9f76a5d7ec92b8b8ba339b",
             "9a52b761f69ab666f48cadb42b788f2fabceddd39201f1066997acf316fd6238",

@@ -82,13 +82,15 @@ use spread::Pending;
 ///
 /// # Contract
 ///
-/// **Bounded work per step.** A step is at most 5 attempts (1, 2, 3, 4 and 16 DP5 steps
-/// between events, 2 and 3 only when the energy check predicts they pass, and the
-/// rungs below 3 or finer skipped when the last steps' energy jumps predict that they
-/// fail: 26 steps' work in all; [`SUBSTEPS`] are the core's rungs), each with at most
-/// [`MAX_EVENTS_PER_STEP`] events, each located in at most [`MAX_LOCATE_ITER`]
-/// evaluations and settled by at most 7 candidate modes of at most 3 coordinate choices
-/// each, and at most [`MAX_RETRIES`] coordinate switches after a failed sub-step. Every
+/// **Bounded work per step.** A step is at most 7 attempts (1, 2, 3, 4, 16, 32 and 64
+/// DP5 steps between events, 2, 3, 32 and 64 only when the energy check predicts they
+/// pass, and the rungs below 3 or finer skipped when the last steps' energy jumps
+/// predict that they fail: 122 steps' work in all; [`SUBSTEPS`] are the core's rungs),
+/// each with at most [`MAX_EVENTS_PER_STEP`] events, each located in at most
+/// [`MAX_LOCATE_ITER`] evaluations and settled by at most 7 candidate modes of at most 3
+/// coordinate choices each, at most [`MAX_RETRIES`] coordinate switches after a failed
+/// sub-step, and one look at the other coordinate choices at each sub-step's end under
+/// half of [`TwinSettings::switch_below`]. Every
 /// evaluation's groups solve in closed form or by Newton-Raphson in at most
 /// [`NEWTON_MAX_ITER`](crate::config::NEWTON_MAX_ITER) iterations (a group that does not
 /// converge fails the evaluation); the event root finders stop after 40 iterations. When a step holds more events than the bound, the rest of the step is
@@ -110,7 +112,10 @@ use spread::Pending;
 /// **Step sizes.** h = 1e-4 s is the reference in f64 (S2's events within 1e-6 s of
 /// h = 5e-5 s); h = 2e-4 s is the recommended f32 step (S2's crank within 7.5e-6 rad of
 /// f64's at 0.5 s where 1 ms is 1.9e-4 rad off, half the work of 1e-4 s; f32's error is
-/// rounding, and up to h = 1 ms no f32 step of S2 is redone in sub-steps).
+/// rounding, and up to h = 1 ms no f32 step of S2 is redone in sub-steps). At h = 1 ms
+/// in f64 the twin keeps h = 1e-4 s's events at every operating point of
+/// `host-sim/sweeps/loop-step.toml` that runs through; under light loads some of its
+/// steps take 16 to 64 sub-steps (11 to 14 times S2's worst step).
 ///
 /// **In firmware** the twin is far too large for a stack: it lives in a `static` and is
 /// built there by [`Twin::new_in`], which initialises it in place (construction needs
@@ -545,6 +550,20 @@ impl<T: Real> Twin<T> {
             }
             if self.sub_step_end(w, inputs, t0, h, events < MAX_EVENTS_PER_STEP)? {
                 events += 1;
+            } else if w.t < t_end
+                && self.slots.cur().conditioning() < self.settings.switch_below * T::c(0.5)
+            {
+                // A step redone in sub-steps may run into a dead point of its
+                // coordinates that steps of the sub-step's length would have switched
+                // away from at an end: the converter at light loads at h = 1 ms, where
+                // after a catch into A68 the lever's conditioning fell to 0.033 (10/100
+                // N·m, motor / load) and 2e-4 (22/200) inside a step, which then broke
+                // the energy balance on every rung. Under half of `switch_below` only
+                // (the step's end looks at `switch_below`): a choice near it still
+                // drives a sub-step well, and switching there moved bench1's observed
+                // release at 0.2866 s into the crank's Newton group (+160k Thumb-2
+                // instructions on the Cortex-M7) for nothing.
+                self.switch_coordinates(w, inputs, None)?;
             }
             if let Some(Pending::Choice(_)) = w.pending {
                 w.behind = true;
@@ -646,9 +665,14 @@ impl<T: Real> Twin<T> {
             self.last_guards = fired.is_empty().then_some((g0, h));
             return Ok(false);
         }
-        if w.audit_at_events {
+        if w.audit_at_events && self.slots.cur().mode != Mode::Coast {
             // A finer rung would redo this step: stop before the location if its end
-            // already breaks the energy balance (see `EARLY_AUDIT_MARGIN`).
+            // already breaks the energy balance (see `EARLY_AUDIT_MARGIN`). Not in
+            // coast: the coasting shaft's turn and the brake's work are booked at the
+            // segment's end (`Twin::coast_to`), so the audit here would miss them (a
+            // braked shaft's stop at 0.1553 s "broke" it by 1,480 tolerances on every
+            // rung, and the step ended with `Diverged` once 16 sub-steps were no
+            // longer the finest).
             let links = self.slots.cur().links(&self.params);
             self.balance_within(w, &links, T::c(EARLY_AUDIT_MARGIN))?;
         }

@@ -38,7 +38,7 @@ fn fifth(n: u32) -> f64 {
 /// its energy jump `excess` times its tolerance (`None`: it failed otherwise): `n`
 /// sub-steps where there were `done` divide the jump by about `(n/done)⁵`. The rungs
 /// of the core's [`SUBSTEPS`] are always tried (a mechanism failure, or a prediction
-/// that fails, goes on to them); the twin's extra rungs (2 and 3) only when predicted
+/// that fails, goes on to them); the twin's extra rungs (2, 3, 32 and 64) only when predicted
 /// to pass by a factor [`RUNG_SAFETY`]. S2 at h = 1 ms: the catch I6 -> A68 at 0.0666 s
 /// broke the balance by 9.9 undivided, where 4 sub-steps had redone it (706k Thumb-2
 /// instructions on the Cortex-M7 in f64).
@@ -172,8 +172,11 @@ mod tests {
         // = 1.7, under RUNG_SAFETY). The step broke by 242 undivided: 4 sub-steps was
         // its rung.
         assert_eq!(after(&[2.97, 20.7]).start_rung(), 4);
-        // Past 4 sub-steps' reach: the finest.
+        // Past 4 sub-steps' reach: 16 (predicted 80 000, 16⁵/2 = 524 288), 32 (2e6,
+        // 32⁵/2 = 1.7e7), and past every rung's the finest.
         assert_eq!(after(&[2.0, 400.0]).start_rung(), 16);
+        assert_eq!(after(&[2.0, 2000.0]).start_rung(), 32);
+        assert_eq!(after(&[1.0, 1e5]).start_rung(), 64);
         // 7.1 → 25.2 predicts 89, under 243/2: 3 sub-steps.
         assert_eq!(after(&[7.1, 25.2]).start_rung(), 3);
     }
@@ -226,7 +229,7 @@ mod tests {
                 .iter()
                 .copied()
                 .find(|n| exact * RUNG_SAFETY <= fifth(*n))
-                .unwrap_or(16);
+                .unwrap_or(64);
             let n = if n >= 3 { n } else { 1 };
             assert_eq!(after(&[a, b]).start_rung(), n, "{a} -> {b}");
         }
@@ -242,8 +245,9 @@ mod tests {
     fn the_rungs_are_tried_where_the_h6_law_predicts_they_pass() {
         use super::SUBSTEPS;
         assert_eq!(RUNG_SAFETY, 2.0);
-        // The core's rungs are all the twin's, in the same order, with 2 and 3 before 4.
-        assert_eq!(RETRY_SUBSTEPS, [1, 2, 3, 4, 16]);
+        // The core's rungs are all the twin's, in the same order, with 2 and 3 before 4
+        // and 32 and 64 after 16.
+        assert_eq!(RETRY_SUBSTEPS, [1, 2, 3, 4, 16, 32, 64]);
         assert!(SUBSTEPS.iter().all(|n| RETRY_SUBSTEPS.contains(n)));
         for n in SUBSTEPS {
             assert!(rung_may_pass::<f64>(n, 1, None), "{n}");
@@ -260,8 +264,13 @@ mod tests {
         // 3 after 2: 1.5⁵ / 2 = 3.796875.
         assert!(rung_may_pass(3, 2, Some(3.796875f64)));
         assert!(!rung_may_pass(3, 2, Some(3.8f64)));
+        // 32 after 16: 2⁵ / 2 = 16; 64 after 16: 4⁵ / 2 = 512; 64 after 32: 16.
+        assert!(rung_may_pass(32, 16, Some(16.0f64)) && !rung_may_pass(32, 16, Some(16.1f64)));
+        assert!(rung_may_pass(64, 16, Some(512.0f64)) && !rung_may_pass(64, 16, Some(513.0f64)));
+        assert!(rung_may_pass(64, 32, Some(16.0f64)) && !rung_may_pass(64, 32, Some(16.1f64)));
         // A failure without an energy jump (a mechanism failure) goes to the core's rungs.
         assert!(!rung_may_pass::<f64>(2, 1, None) && !rung_may_pass::<f64>(3, 1, None));
+        assert!(!rung_may_pass::<f64>(32, 16, None) && !rung_may_pass::<f64>(64, 16, None));
         // In f32 the same law.
         assert!(rung_may_pass(3, 1, Some(121.5f32)) && !rung_may_pass(3, 1, Some(122.0f32)));
     }

@@ -16,17 +16,22 @@ pub const MAX_RETRIES: usize = 2;
 
 /// Sub-steps tried in turn when a step breaks the energy balance (see
 /// [`TwinSettings::energy_tol`]): the core's division of a fixed step, at most
-/// 1 + 4 + 16 DP5 steps' work. The twin tries 2 and 3 before 4 when the failed
-/// attempt's energy jump predicts that they pass (at most 1 + 2 + 3 + 4 + 16).
+/// 1 + 4 + 16 DP5 steps' work. The twin tries 2 and 3 before 4, and 32 and 64 after 16,
+/// when the failed attempt's energy jump predicts that they pass.
 pub use crate::balance::SUBSTEPS;
 
-/// The twin's rungs: [`SUBSTEPS`] and 2 and 3 before 4, each tried only when the last
-/// failed attempt's energy jump predicts that it passes (`rung_may_pass` in the twin's
-/// step). At most 1 + 2 + 3 + 4 + 16 DP5 steps' work. S2 in f64 at h = 1 ms: 7 of the
-/// 8 steps that 4 sub-steps redid pass in 3 (jumps of 19.6 to 70 tolerances undivided),
-/// among them the catch I0 -> A8 at 0.1763 s (488k Thumb-2 instructions on the
-/// Cortex-M7 in 1 + 4 DP5 steps).
-pub(super) const RETRY_SUBSTEPS: [u32; 5] = [1, 2, 3, 4, 16];
+/// The twin's rungs: [`SUBSTEPS`], 2 and 3 before 4, and 32 and 64 after 16, each of
+/// the twin's own tried only when the last failed attempt's energy jump predicts that it
+/// passes (`rung_may_pass` in the twin's step). At most 1 + 2 + 3 + 4 + 16 + 32 + 64 DP5
+/// steps' work. S2 in f64 at h = 1 ms: 7 of the 8 steps that 4 sub-steps redid pass in 3
+/// (jumps of 19.6 to 70 tolerances undivided), among them the catch I0 -> A8 at
+/// 0.1763 s (488k Thumb-2 instructions on the Cortex-M7 in 1 + 4 DP5 steps). The
+/// converter at light loads needs the finer ones at h = 1 ms: after a catch into A68
+/// the mechanism runs near a dead point of each coordinate choice in turn (at
+/// 20/200 N·m, motor / load, 16 sub-steps left the step after the catch at 0.2224 s
+/// 3 tolerances over; at h = 1e-4 s the same stretch needs 3 sub-steps a step, 33 µs).
+/// S2 never reaches past 4.
+pub(super) const RETRY_SUBSTEPS: [u32; 7] = [1, 2, 3, 4, 16, 32, 64];
 
 /// The factor by which a predicted rung's jump must stay under its tolerance
 /// (the O(h⁶) estimate of `rung_may_pass` is asymptotic).
@@ -63,7 +68,7 @@ pub const SINGULAR_CONDITIONING: f64 = 1e-2;
 /// present rate counts as in line when a step fails ([`TwinStepError::Diode`](super::TwinStepError::Diode)). In f64 the
 /// branch's |sin| is under [`SINGULAR_CONDITIONING`] by then; in f32 rounding breaks
 /// the energy balance 8 to 20 steps before (S1 at h = 1e-4 s: 0.3225 s against f64's
-/// 0.3238 s, 13 steps before it), at |sin| of 3e-2 to 6e-2.
+/// 0.3239 s, 14 steps before it), at |sin| of 3e-2 to 6e-2.
 pub const DIODE_HORIZON_STEPS: f64 = 32.0;
 
 /// Settings fixed at start.
