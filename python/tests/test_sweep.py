@@ -47,14 +47,15 @@ def test_dask_sweep_equals_host_sim(reference, tmp_path, workers):
 
 
 def test_a_failing_variant_is_a_row(host_sim, tmp_path):
-    # A step so long the twin's energy check fails: a row saying so, not a lost task.
+    # A step so long the twin's energy check fails (h = 0.2 s; at 0.05 s its sub-steps
+    # keep the first 0.2 s): a row saying so, not a lost task.
     f = tmp_path / "bad.toml"
     f.write_text('base = "ccc-s2"\n[set]\n"run.t_end" = 0.2\n'
-                 '[[axis]]\nkey = "run.h"\nvalues = [1e-4, 0.05]\n')
+                 '[[axis]]\nkey = "run.h"\nvalues = [1e-4, 0.2]\n')
     ref = tmp_path / "ref"
     p = subprocess.run([str(host_sim), "sweep", str(f), "--out-dir", str(ref), "--quiet"],
                        capture_output=True, text=True)
-    assert p.returncode == 0 and "variant 1 (run.h = 0.05)" in p.stderr, p.stderr
+    assert p.returncode == 0 and "variant 1 (run.h = 0.2)" in p.stderr, p.stderr
     structomat.sweep(f, tmp_path / "py")
     assert files(tmp_path / "py") == files(ref)
     rows = (ref / "sweep.csv").read_text().splitlines()

@@ -37,13 +37,14 @@ mod reduced;
 use reduced::Sizes;
 
 /// Loads on each body without the motors: gravity, constant and caller-set loads, and
-/// inertia (`F - M a_G`, live rows only).
+/// inertia (`F - M a_G`, live rows only), added to `f` (zero on entry). Written in
+/// place: returned by value, the 288 B vector (f64) was copied out at every call.
 fn free_body_loads<T: Real, C: Capacity<T>>(
     model: &Model<T, C>,
     ws: &Workspace<T, C>,
-) -> SVector<T, POSE_ROWS> {
-    let mut f = SVector::<T, POSE_ROWS>::zeros();
-    loads_without_motors(model, &ws.body, &ws.applied_moment, &mut f);
+    f: &mut SVector<T, POSE_ROWS>,
+) {
+    loads_without_motors(model, &ws.body, &ws.applied_moment, f);
     for (i, (l, rows)) in model
         .links()
         .iter()
@@ -55,7 +56,6 @@ fn free_body_loads<T: Real, C: Capacity<T>>(
             *e -= m * a;
         }
     }
-    f
 }
 
 /// A joint's reaction unknowns at the workspace's pose: where it acts and, per unknown,
@@ -391,7 +391,8 @@ pub fn reactions<T: Real, C: Capacity<T>>(
     ws: &mut Workspace<T, C>,
     time: f64,
 ) -> Result<(), StepError> {
-    let mut loads = free_body_loads(model, ws);
+    let mut loads = SVector::<T, POSE_ROWS>::zeros();
+    free_body_loads(model, ws, &mut loads);
     let mut eq = Equilibrium::new();
     for (gi, g) in model.groups().iter().enumerate().rev() {
         eq.set(model, ws, g, &loads);

@@ -174,6 +174,7 @@ impl<T: Real> Twin<T> {
             time: self.t.to_f64(),
             mode: self.slots.cur().mode,
             jump: jump.to_f64(),
+            substeps: w.substeps,
             worst: Failure {
                 coords: self.slots.cur().coords,
                 group,

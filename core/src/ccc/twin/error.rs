@@ -89,7 +89,8 @@ pub enum TwinStepError {
         failures: heapless::Vec<Failure, 3>,
     },
     /// One step breaks the energy balance past [`TwinSettings::energy_tol`] even in the
-    /// finest [`SUBSTEPS`]: the motion runs into a singularity of the mechanism faster
+    /// finest sub-steps tried (the finest of [`SUBSTEPS`], or the twin's finer rungs
+    /// where the failed attempts predicted them to pass): the motion runs into a singularity of the mechanism faster
     /// than the step can follow (the worst group's conditioning is then near 0), or
     /// the step is far too coarse for the motion. Names the worst-conditioned group.
     Diverged {
@@ -99,6 +100,8 @@ pub enum TwinStepError {
         mode: Mode,
         /// Change of the audit residual over the step, J.
         jump: f64,
+        /// The sub-steps of the last attempt, the finest tried.
+        substeps: u32,
         /// The worst-conditioned group of the sequence (fault: its conditioning).
         worst: Failure,
     },
@@ -249,11 +252,11 @@ impl fmt::Display for TwinStepError {
                 time,
                 mode,
                 jump,
+                substeps,
                 worst,
             } => write!(
                 f,
-                "t = {time:.6} s: mode {mode}: one step breaks the energy balance by {jump:.3e} J even in {} sub-steps: {} (worst group in {} coordinates: {} {})",
-                SUBSTEPS[SUBSTEPS.len() - 1],
+                "t = {time:.6} s: mode {mode}: one step breaks the energy balance by {jump:.3e} J even in {substeps} sub-steps: {} (worst group in {} coordinates: {} {})",
                 if self.at_singularity() {
                     "a singularity of the mechanism is near"
                 } else {

@@ -88,9 +88,9 @@ use spread::Pending;
 /// predict that they fail: 122 steps' work in all; [`SUBSTEPS`] are the core's rungs),
 /// each with at most [`MAX_EVENTS_PER_STEP`] events, each located in at most
 /// [`MAX_LOCATE_ITER`] evaluations and settled by at most 7 candidate modes of at most 3
-/// coordinate choices each, at most [`MAX_RETRIES`] coordinate switches after a failed
-/// sub-step, and one look at the other coordinate choices at each sub-step's end under
-/// half of [`TwinSettings::switch_below`]. Every
+/// coordinate choices each, and at most [`MAX_RETRIES`] coordinate switches inside the
+/// step (after a failed sub-step, or at a sub-step's end where the choice is under half
+/// of [`TwinSettings::switch_below`]: a look at the others there, one a sub-step). Every
 /// evaluation's groups solve in closed form or by Newton-Raphson in at most
 /// [`NEWTON_MAX_ITER`](crate::config::NEWTON_MAX_ITER) iterations (a group that does not
 /// converge fails the evaluation); the event root finders stop after 40 iterations. When a step holds more events than the bound, the rest of the step is
@@ -285,6 +285,8 @@ struct Work<T: Real> {
     /// ([`Twin::balance_within`]), and fail the attempt there if it already breaks by
     /// [`EVENT_AUDIT_MARGIN`](settings::EVENT_AUDIT_MARGIN) times the tolerance.
     audit_at_events: bool,
+    /// The attempt's sub-steps (its rung, for [`TwinStepError::Diverged`]).
+    substeps: u32,
     /// The state `w` holds is an event's that passed the check of `audit_at_events`
     /// ([`Twin::event_state`]): the mode choice does not check it again.
     event_audited: bool,
@@ -455,6 +457,7 @@ impl<T: Real> Twin<T> {
         // Every rung but the finest may stop at an event whose state already breaks the
         // energy balance: a finer one redoes the step, its event and mode choice anyway.
         w.audit_at_events = RETRY_SUBSTEPS.last().is_some_and(|n| substeps < *n);
+        w.substeps = substeps;
         let advanced = self.advance(&mut w, inputs, changed, substeps);
         // The physical links the check and the commit read, made where they stay (as
         // a result's part they were moved twice: 504 B in f64).
@@ -492,6 +495,7 @@ impl<T: Real> Twin<T> {
             shaft_turn: T::zero(),
             segment_levers: [self.links[6].theta, self.links[8].theta],
             audit_at_events: false,
+            substeps: 1,
             event_audited: false,
             restepped: false,
             at_rest: false,
@@ -551,6 +555,7 @@ impl<T: Real> Twin<T> {
             if self.sub_step_end(w, inputs, t0, h, events < MAX_EVENTS_PER_STEP)? {
                 events += 1;
             } else if w.t < t_end
+                && retries < MAX_RETRIES
                 && self.slots.cur().conditioning() < self.settings.switch_below * T::c(0.5)
             {
                 // A step redone in sub-steps may run into a dead point of its
@@ -562,8 +567,13 @@ impl<T: Real> Twin<T> {
                 // (the step's end looks at `switch_below`): a choice near it still
                 // drives a sub-step well, and switching there moved bench1's observed
                 // release at 0.2866 s into the crank's Newton group (+160k Thumb-2
-                // instructions on the Cortex-M7) for nothing.
+                // instructions on the Cortex-M7) for nothing. A switch made counts
+                // among the step's `MAX_RETRIES`: the step's log holds them all.
+                let logged = self.switches.len();
                 self.switch_coordinates(w, inputs, None)?;
+                if self.switches.len() > logged {
+                    retries += 1;
+                }
             }
             if let Some(Pending::Choice(_)) = w.pending {
                 w.behind = true;

@@ -11,7 +11,8 @@ pub const MAX_EVENTS_PER_STEP: usize = 4;
 /// Evaluations spent locating one event at most (Illinois regula falsi).
 pub const MAX_LOCATE_ITER: usize = 16;
 
-/// Coordinate switches after a failed sub-step at most.
+/// Coordinate switches inside a step at most: after a failed sub-step, or at a sub-step's
+/// end near a dead point (the step's end may switch once more).
 pub const MAX_RETRIES: usize = 2;
 
 /// Sub-steps tried in turn when a step breaks the energy balance (see
