@@ -276,19 +276,27 @@ pub fn generalized_accelerations<T: Real, C: Capacity<T>>(
     solve_accelerations(model, ws, t)
 }
 
+/// The workspace's velocity matrix `V`, applied loads `F` and bias accelerations `a_b`,
+/// as [`generalized_terms`] reads them.
+type Kinematics<'a, T> = (
+    &'a SMatrix<T, POSE_ROWS, MAX_DOF>,
+    &'a SVector<T, POSE_ROWS>,
+    &'a SVector<T, POSE_ROWS>,
+);
+
 /// `VᵀMV` and `Vᵀ(F - M a_b)` for `M` coordinates (thesis eq. 4.49) into the top-left
 /// blocks of `mq` and `gf`: one pass over the live rows (3 per link), each adding its
 /// terms `m_r V_rj V_rk` (lower triangle, then mirrored) and `V_rj (F_r - m_r a_b,r)`.
 fn generalized_terms<T: Real, const M: usize, C: Capacity<T>>(
     model: &Model<T, C>,
-    ws: &Workspace<T, C>,
+    (v, force, bias): Kinematics<'_, T>,
     mq: &mut SMatrix<T, MAX_DOF, MAX_DOF>,
     gf: &mut SVector<T, MAX_DOF>,
 ) {
-    let v = ws.v.as_slice();
+    let v = v.as_slice();
     let cols: [&[T]; M] =
         core::array::from_fn(|j| v.get(j * POSE_ROWS..(j + 1) * POSE_ROWS).unwrap_or(&[]));
-    let (force, bias) = (ws.force.as_slice(), ws.a_bias.as_slice());
+    let (force, bias) = (force.as_slice(), bias.as_slice());
     let mut a = [[T::zero(); M]; M];
     let mut b = [T::zero(); M];
     for (i, l) in model.links().iter().enumerate() {
@@ -338,16 +346,26 @@ pub fn solve_accelerations<T: Real, C: Capacity<T>>(
     let time = t.to_f64();
     applied_forces(model, ws, t)?;
     let m = model.dof().min(MAX_DOF);
-    let mut mq = SMatrix::<T, MAX_DOF, MAX_DOF>::identity();
-    let mut gf = SVector::<T, MAX_DOF>::zeros();
+    // Into the workspace's own matrices: built locally and copied there, they cost the
+    // Cortex-M7 a 72 B copy at every evaluation.
+    let Workspace {
+        v,
+        force,
+        a_bias,
+        mass_q: mq,
+        gen_force: gf,
+        ..
+    } = &mut *ws;
+    *mq = SMatrix::identity();
+    *gf = SVector::zeros();
+    let kin = (&*v, &*force, &*a_bias);
     match m {
         0 => {}
-        1 => generalized_terms::<T, 1, C>(model, ws, &mut mq, &mut gf),
-        2 => generalized_terms::<T, 2, C>(model, ws, &mut mq, &mut gf),
-        _ => generalized_terms::<T, MAX_DOF, C>(model, ws, &mut mq, &mut gf),
+        1 => generalized_terms::<T, 1, C>(model, kin, mq, gf),
+        2 => generalized_terms::<T, 2, C>(model, kin, mq, gf),
+        _ => generalized_terms::<T, MAX_DOF, C>(model, kin, mq, gf),
     }
-    ws.mass_q = mq;
-    ws.gen_force = gf;
+    let (mq, gf) = (&*mq, &*gf);
     // Overflowing terms mean the state itself has run away (a step too large for the
     // motion makes the explicit integrator unstable): say so rather than blame the
     // configuration.
@@ -378,8 +396,8 @@ pub fn solve_accelerations<T: Real, C: Capacity<T>>(
             qdd[1] = (a * gf[1] - b * gf[0]) / det;
         }
         _ => {
-            let l = cholesky(&mq).ok_or(singular)?;
-            let x = cholesky_solve(&l, &gf);
+            let l = cholesky(mq).ok_or(singular)?;
+            let x = cholesky_solve(&l, gf);
             for (o, v) in qdd.iter_mut().zip(x.iter()) {
                 *o = *v;
             }
