@@ -181,7 +181,11 @@ impl<T: Real> Equilibrium<T> {
                 None => u.n = 0,
             }
         }
-        self.lam = [T::zero(); GROUP_ROWS];
+        // The group's unknowns only: nothing reads `λ` past them (a dyad's 6 of 18).
+        let used: usize = self.joints.iter().map(|u| u.n).sum();
+        for l in self.lam.iter_mut().take(used) {
+            *l = T::zero();
+        }
     }
 
     /// Solves for `λ` by the group's structure (see the module docs); `false` when the
