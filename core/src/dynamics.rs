@@ -276,9 +276,9 @@ pub fn generalized_accelerations<T: Real, C: Capacity<T>>(
     solve_accelerations(model, ws, t)
 }
 
-/// The workspace's velocity matrix `V`, applied loads `F` and bias accelerations `a_b`,
-/// as [`generalized_terms`] reads them.
-type Kinematics<'a, T> = (
+/// The workspace's velocity matrix `V`, applied loads `F` and bias accelerations `a_b`
+/// from the last evaluation, as [`generalized_terms`] reads them.
+type Evaluated<'a, T> = (
     &'a SMatrix<T, POSE_ROWS, MAX_DOF>,
     &'a SVector<T, POSE_ROWS>,
     &'a SVector<T, POSE_ROWS>,
@@ -289,7 +289,7 @@ type Kinematics<'a, T> = (
 /// terms `m_r V_rj V_rk` (lower triangle, then mirrored) and `V_rj (F_r - m_r a_b,r)`.
 fn generalized_terms<T: Real, const M: usize, C: Capacity<T>>(
     model: &Model<T, C>,
-    (v, force, bias): Kinematics<'_, T>,
+    (v, force, bias): Evaluated<'_, T>,
     mq: &mut SMatrix<T, MAX_DOF, MAX_DOF>,
     gf: &mut SVector<T, MAX_DOF>,
 ) {
@@ -358,12 +358,12 @@ pub fn solve_accelerations<T: Real, C: Capacity<T>>(
     } = &mut *ws;
     *mq = SMatrix::identity();
     *gf = SVector::zeros();
-    let kin = (&*v, &*force, &*a_bias);
+    let evaluated = (&*v, &*force, &*a_bias);
     match m {
         0 => {}
-        1 => generalized_terms::<T, 1, C>(model, kin, mq, gf),
-        2 => generalized_terms::<T, 2, C>(model, kin, mq, gf),
-        _ => generalized_terms::<T, MAX_DOF, C>(model, kin, mq, gf),
+        1 => generalized_terms::<T, 1, C>(model, evaluated, mq, gf),
+        2 => generalized_terms::<T, 2, C>(model, evaluated, mq, gf),
+        _ => generalized_terms::<T, MAX_DOF, C>(model, evaluated, mq, gf),
     }
     let (mq, gf) = (&*mq, &*gf);
     // Overflowing terms mean the state itself has run away (a step too large for the

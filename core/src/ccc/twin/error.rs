@@ -90,9 +90,10 @@ pub enum TwinStepError {
     },
     /// One step breaks the energy balance past [`TwinSettings::energy_tol`] even in the
     /// finest sub-steps tried (the finest of [`SUBSTEPS`], or the twin's finer rungs
-    /// where the failed attempts predicted them to pass): the motion runs into a singularity of the mechanism faster
-    /// than the step can follow (the worst group's conditioning is then near 0), or
-    /// the step is far too coarse for the motion. Names the worst-conditioned group.
+    /// where the failed attempts predicted them to pass): the motion runs into a
+    /// singularity of the mechanism faster than the step can follow (the worst group's
+    /// conditioning is then near 0), or the step is far too coarse for the motion.
+    /// Names the sub-steps and the worst-conditioned group.
     Diverged {
         /// Time at the start of the step, s.
         time: f64,

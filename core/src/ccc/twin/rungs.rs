@@ -38,8 +38,8 @@ fn fifth(n: u32) -> f64 {
 /// its energy jump `excess` times its tolerance (`None`: it failed otherwise): `n`
 /// sub-steps where there were `done` divide the jump by about `(n/done)⁵`. The rungs
 /// of the core's [`SUBSTEPS`] are always tried (a mechanism failure, or a prediction
-/// that fails, goes on to them); the twin's extra rungs (2, 3, 32 and 64) only when predicted
-/// to pass by a factor [`RUNG_SAFETY`]. S2 at h = 1 ms: the catch I6 -> A68 at 0.0666 s
+/// that fails, goes on to them); the twin's extra rungs (2, 3, 32 and 64) only when
+/// predicted to pass by a factor [`RUNG_SAFETY`]. S2 at h = 1 ms: the catch I6 -> A68 at 0.0666 s
 /// broke the balance by 9.9 undivided, where 4 sub-steps had redone it (706k Thumb-2
 /// instructions on the Cortex-M7 in f64).
 pub(super) fn rung_may_pass<T: Real>(n: u32, done: u32, excess: Option<T>) -> bool {
