@@ -123,6 +123,8 @@ struct Equilibrium<T: Real> {
     cog: [Vec2<T>; MAX_GROUP_LINKS],
     load: [Vector3<T>; MAX_GROUP_LINKS],
     joints: [Unknowns<T>; MAX_GROUP_JOINTS],
+    /// The group's unknowns, `Σ n` over its joints (the used part of `lam`).
+    used: usize,
     lam: [T; GROUP_ROWS],
 }
 
@@ -138,6 +140,7 @@ impl<T: Real> Equilibrium<T> {
             cog: [Vec2::zeros(); MAX_GROUP_LINKS],
             load: [Vector3::zeros(); MAX_GROUP_LINKS],
             joints: [none; MAX_GROUP_JOINTS],
+            used: 0,
             lam: [T::zero(); GROUP_ROWS],
         }
     }
@@ -182,8 +185,8 @@ impl<T: Real> Equilibrium<T> {
             }
         }
         // The group's unknowns only: nothing reads `λ` past them (a dyad's 6 of 18).
-        let used: usize = self.joints.iter().map(|u| u.n).sum();
-        for l in self.lam.iter_mut().take(used) {
+        self.used = self.joints.iter().map(|u| u.n).sum();
+        for l in self.lam.iter_mut().take(self.used) {
             *l = T::zero();
         }
     }
@@ -192,8 +195,7 @@ impl<T: Real> Equilibrium<T> {
     /// dense system is singular (the closed forms leave non-finite values instead).
     fn solve(&mut self, g: &Group<T>) -> bool {
         let links = g.placements.len();
-        let unknowns: usize = self.joints.iter().map(|u| u.n).sum();
-        let closed = match (links, unknowns) {
+        let closed = match (links, self.used) {
             (1, 3) => self.single_link(g),
             (2, 6) => self.dyad(g),
             _ => false,
@@ -400,8 +402,7 @@ pub fn reactions<T: Real, C: Capacity<T>>(
     let mut eq = Equilibrium::new();
     for (gi, g) in model.groups().iter().enumerate().rev() {
         eq.set(model, ws, g, &loads);
-        let used: usize = eq.joints.iter().map(|u| u.n).sum();
-        if !(eq.solve(g) && eq.lam.iter().take(used).all(|v| v.finite())) {
+        if !(eq.solve(g) && eq.lam.iter().take(eq.used).all(|v| v.finite())) {
             return Err(StepError::Group {
                 time,
                 group: group_id(g, gi),

@@ -159,22 +159,24 @@ pub(super) fn scan_choices<T: Real>(
 impl<T: Real> Twin<T> {
     /// Tries the mode's other coordinate choices at `w`'s state and takes the best
     /// conditioned if it beats the current one by 1.5 (`failed`: the current choice just
-    /// failed, take any that works). Maps the state exactly and logs it.
+    /// failed, take any that works). Maps the state exactly and logs it. Returns whether
+    /// it switched.
     pub(super) fn switch_coordinates(
         &mut self,
         w: &mut Work<T>,
         inputs: &Inputs<T>,
         failed: Option<StepError>,
-    ) -> Result<(), TwinStepError> {
+    ) -> Result<bool, TwinStepError> {
         let now = self.slots.cur().conditioning();
         let Some((cond, coords, q)) = self.best_other_choice(w, failed)? else {
             // No other choice assembles here: the current one still drives.
-            return Ok(());
+            return Ok(false);
         };
         if !(failed.is_some() || cond > now * T::c(1.5)) {
-            return Ok(());
+            return Ok(false);
         }
-        self.take_coordinates(w, inputs, (now, cond), coords, &q)
+        self.take_coordinates(w, inputs, (now, cond), coords, &q)?;
+        Ok(true)
     }
 
     /// Back to the mode's preferred coordinates (its first choice, whose groups are
