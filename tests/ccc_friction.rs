@@ -6,7 +6,7 @@
 //! energy audit closing on S2 with every loss on.
 
 use structomat::ccc::{
-    CccParams, Friction, Inputs, Mode, MotorInput, Twin, TwinSettings, FRICTION_JOINTS,
+    CccParams, EventKind, Friction, Inputs, Mode, MotorInput, Twin, TwinSettings, FRICTION_JOINTS,
     FRICTION_JOINT_NAMES,
 };
 use structomat::motor::Motor;
@@ -289,6 +289,57 @@ fn s2_with_friction_closes_its_energy_audit() {
         a.motor_work,
         a.residual()
     );
+}
+
+/// Every loss on (as in [`s2_with_friction_closes_its_energy_audit`]) at the 1 kHz
+/// loop's step, against the same second at h = 1e-4 s: the same events in the same
+/// order, each within 1e-4 s, the audit under 1e-6 of the motor's work at every step.
+/// At 8/1000 N·m the shaft stops in A68 at 0.360 s and lever 8 keeps it held (I8); at
+/// 12/1200 N·m both do (jam, 0.305 s). At 1 ms the state of those stops lies a little
+/// past them, the levers moving 4e-5 rad/s away from the stopped shaft: taken by its
+/// speed alone, lever 8 was let go (I0) and caught again 3 µs later, two events that
+/// the step of 1e-4 s does not make.
+#[test]
+fn shaft_stops_with_friction_at_the_loop_step_keep_the_events() {
+    let mut p = CccParams::<f64>::reference();
+    p.friction.viscous = [0.02; 9];
+    p.friction.coulomb = [0.05; 9];
+    p.friction.clutch_drag = 0.05;
+    for (motor, load) in [(8.0, 1000.0), (12.0, 1200.0)] {
+        let inputs = Inputs {
+            motor: MotorInput::Law(Motor::Constant(motor)),
+            load,
+            measured: None,
+        };
+        let events = |h: f64| {
+            let mut twin = Twin::new(p, TwinSettings::reference(h), inputs).expect("set up");
+            let mut events: Vec<(EventKind, Mode, f64)> = Vec::new();
+            for _ in 0..(1.0 / h).round() as u64 {
+                twin.step(&inputs).expect("a step with friction");
+                events.extend(twin.events().iter().map(|e| (e.kind, e.to, e.time)));
+                let a = twin.audit();
+                let rel = a.residual().abs() / a.motor_work.abs().max(1.0);
+                assert!(rel < 1e-6, "{motor}/{load} N·m, h = {h}: audit {rel:e}");
+            }
+            events
+        };
+        let (fine, step) = (events(1e-4), events(1e-3));
+        let kinds = |e: &[(EventKind, Mode, f64)]| -> Vec<(EventKind, Mode)> {
+            e.iter().map(|x| (x.0, x.1)).collect()
+        };
+        assert_eq!(kinds(&fine), kinds(&step), "{motor}/{load} N·m");
+        assert!(
+            fine.iter()
+                .any(|e| e.0 == EventKind::ShaftStop && e.1 != Mode::I0),
+            "{motor}/{load} N·m: a shaft stop held by a lever: {fine:?}"
+        );
+        for (a, b) in fine.iter().zip(&step) {
+            assert!(
+                (a.2 - b.2).abs() < 1e-4,
+                "{motor}/{load} N·m: {a:?} vs {b:?}"
+            );
+        }
+    }
 }
 
 /// Bad coefficients are refused by the parameters' validation, named by their run-file

@@ -4,7 +4,7 @@
 
 use super::super::build::{driving_link, dyads_conditioning};
 use super::super::mode::{Coordinates, Mode};
-use super::consistency::torques_clear;
+use super::consistency::{torques_clear, Touch};
 use super::error::TwinStepError;
 use super::inputs::Inputs;
 use super::settings::*;
@@ -30,7 +30,7 @@ impl<T: Real> Twin<T> {
         u_plus: &SVector<T, 3>,
         from: Mode,
         inputs: &Inputs<T>,
-        tol_w: T,
+        touch: Touch<T>,
         screened: Option<[T; 2]>,
     ) -> Result<Candidate<T>, TwinStepError> {
         // Physical angular speeds after the impact, from the reference model's V.
@@ -72,7 +72,7 @@ impl<T: Real> Twin<T> {
             links[8].alpha,
         );
         Ok(Candidate {
-            violation: self.violation(m, from, &c, &links, inputs, tol_w, coast),
+            violation: self.violation(m, from, &c, &links, inputs, touch, coast),
             screened: clear,
             speed_gap,
             place,

@@ -5,6 +5,7 @@ use super::super::build::BRANCHES;
 use super::super::mode::{Clutch, Mode};
 use super::candidate::{Candidate, Place};
 use super::coast::Coast;
+use super::consistency::Touch;
 use super::coordinates::best_slot;
 use super::error::TwinStepError;
 use super::evaluate::{Stage, Torques};
@@ -78,7 +79,14 @@ impl<T: Real> Twin<T> {
             pose: &pose,
             space: &space,
             inputs,
-            tol_w,
+            touch: Touch {
+                tol_w,
+                held_at_stop: if kind == EventKind::ShaftStop {
+                    from.clutches().map(|c| c != Clutch::Free)
+                } else {
+                    [false; 2]
+                },
+            },
         };
         let pick = self.pick(w, &cands, &judge)?;
         // The segment in `from` ends here (positions are continuous through an event).
@@ -184,8 +192,8 @@ impl<T: Real> Twin<T> {
                 let _ = self.candidates.push((m, T::c(f64::INFINITY)));
                 continue; // rank-deficient constraints
             };
-            let (from, inputs, tol_w) = (judge.from, judge.inputs, judge.tol_w);
-            let cand = match self.screen(m, from, &mut yr_at, &u_plus, w.t, inputs, tol_w) {
+            let (from, inputs, touch) = (judge.from, judge.inputs, judge.touch);
+            let cand = match self.screen(m, from, &mut yr_at, &u_plus, w.t, inputs, touch) {
                 Some((v, _)) if v > screen_margin::<T>() => {
                     screened_out = true;
                     Candidate::rejected(v)
@@ -193,7 +201,7 @@ impl<T: Real> Twin<T> {
                 screened => {
                     let c = screened.map(|(_, c)| c);
                     let pose = judge.pose;
-                    self.try_candidate(w, m, pose, &u_plus, from, inputs, tol_w, c)?
+                    self.try_candidate(w, m, pose, &u_plus, from, inputs, touch, c)?
                 }
             };
             let _ = self.candidates.push((m, cand.violation));
@@ -227,8 +235,8 @@ impl<T: Real> Twin<T> {
         );
         let (rows, projection) = self.projected(m, judge.space);
         let (u_plus, loss) = projection.unwrap_or((judge.space.u, T::zero()));
-        let (from, pose, inputs, tol_w) = (judge.from, judge.pose, judge.inputs, judge.tol_w);
-        let cand = self.try_candidate(w, m, pose, &u_plus, from, inputs, tol_w, None)?;
+        let (from, pose, inputs, touch) = (judge.from, judge.pose, judge.inputs, judge.touch);
+        let cand = self.try_candidate(w, m, pose, &u_plus, from, inputs, touch, None)?;
         Ok(Pick {
             mode: m,
             loss,
@@ -247,7 +255,7 @@ impl<T: Real> Twin<T> {
         judge: &Judge<'_, T>,
     ) -> Result<Option<(T, Mode)>, TwinStepError> {
         let mut best: Option<(T, Mode)> = None;
-        let (from, pose, inputs, tol_w) = (judge.from, judge.pose, judge.inputs, judge.tol_w);
+        let (from, pose, inputs, touch) = (judge.from, judge.pose, judge.inputs, judge.touch);
         for i in 0..self.candidates.len() {
             let Some(&(m, mut v)) = self.candidates.get(i) else {
                 break;
@@ -255,7 +263,7 @@ impl<T: Real> Twin<T> {
             if v.finite() {
                 if let (_, Some((u_plus, _))) = self.projected(m, judge.space) {
                     v = self
-                        .try_candidate(w, m, pose, &u_plus, from, inputs, tol_w, None)?
+                        .try_candidate(w, m, pose, &u_plus, from, inputs, touch, None)?
                         .violation;
                 }
             }
@@ -455,8 +463,8 @@ struct Judge<'a, T: Real> {
     space: &'a MomentumSpace<T>,
     /// The step's inputs.
     inputs: &'a Inputs<T>,
-    /// The speed tolerance, rad/s.
-    tol_w: T,
+    /// Which free levers touch the shaft.
+    touch: Touch<T>,
 }
 
 /// The mode a choice takes.

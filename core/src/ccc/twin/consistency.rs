@@ -36,12 +36,30 @@ pub(super) fn torques_clear<T: Real>(m: Mode, c: &[T; 2], inputs: &Inputs<T>) ->
     m.shaft_turning() || locked < inputs.load - clear
 }
 
+/// Which free levers a mode choice's consistency conditions take as touching the
+/// shaft, whose acceleration then may not pass the shaft's in the drive direction.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Touch<T> {
+    /// A lever whose speed is within this of the shaft's touches it, rad/s.
+    pub tol_w: T,
+    /// The levers (6, 8) that held the shaft as it stopped: they touch it whatever
+    /// their speed. The state of a shaft stop lies a little past the stop (on the
+    /// dense output, or the end of a step taken just past it), where the levers still
+    /// move with the shaft's residual speed and the other links with what it
+    /// transmits to them; a candidate that holds the shaft sees that speed as the
+    /// levers' speed relative to it, which is the stop's location error, not a motion
+    /// away. Without this, a lever moving 4e-5 rad/s "away" was let go and caught
+    /// again 3 µs later (friction at every joint, 8/1000 at h = 1 ms).
+    pub held_at_stop: [bool; 2],
+}
+
 impl<T: Real> Twin<T> {
     /// How far mode `m` (entered from `from`) with the clutch torques `c` and the
     /// physical links' speeds and accelerations `links` violates SPEC 3's consistency
     /// conditions, each relative to its scale (0: consistent): c_k ≥ 0 for a locked or
     /// engaged lever, Σc_k ≤ T_r over the locked ones, a free lever touching the shaft
-    /// does not accelerate past it in the drive direction, a shaft starting from rest
+    /// (as `touch` says) does not accelerate past it in the drive direction, a shaft
+    /// starting from rest
     /// accelerates in the drive direction. `coast`: the shaft's speed (rad/s) and
     /// acceleration (rad/s²) if `m` is [`Mode::Coast`] (no lever carries it).
     #[allow(clippy::too_many_arguments)]
@@ -52,7 +70,7 @@ impl<T: Real> Twin<T> {
         c: &[T; 2],
         links: &[LinkState<T>; 9],
         inputs: &Inputs<T>,
-        tol_w: T,
+        touch: Touch<T>,
         coast: [T; 2],
     ) -> T {
         let d = self.drive;
@@ -91,7 +109,7 @@ impl<T: Real> Twin<T> {
                         locked += d * drag * l.omega;
                     }
                     let rel_w = l.omega - shaft_w;
-                    if rel_w.abs() <= tol_w {
+                    if rel_w.abs() <= touch.tol_w || touch.held_at_stop.get(k) == Some(&true) {
                         let rel = d * (l.alpha - shaft_alpha);
                         v += (rel - tol_a).max(T::zero()) / alpha_scale;
                     }
@@ -168,7 +186,7 @@ impl<T: Real> Twin<T> {
         u_plus: &SVector<T, 3>,
         t: T,
         inputs: &Inputs<T>,
-        tol_w: T,
+        touch: Touch<T>,
     ) -> Option<(T, [T; 2])> {
         let d = self.drive;
         // The reference evaluated at the candidate's speeds, unless the speeds `yr` its
@@ -222,7 +240,7 @@ impl<T: Real> Twin<T> {
             l.alpha = v[0] * x[0] + v[1] * x[1] + r.alpha_bias(p);
         }
         let coast = [u_plus[2], x[2]];
-        Some((self.violation(m, from, &c, &links, inputs, tol_w, coast), c))
+        Some((self.violation(m, from, &c, &links, inputs, touch, coast), c))
     }
 
     /// The reference's KKT system with mode `m`'s clutches as constraints on the
@@ -289,7 +307,7 @@ mod tests {
     use super::super::inputs::{Inputs, MotorInput};
     use super::super::slot::LinkState;
     use super::super::{Twin, TwinSettings};
-    use super::torques_clear;
+    use super::{torques_clear, Touch};
 
     fn inputs(load: f64) -> Inputs<f64> {
         Inputs {
@@ -330,8 +348,12 @@ mod tests {
         let tol_w = 1e-6;
         let at_rest = [LinkState::default(); 9];
         let close = |a: f64, b: f64| (a - b).abs() <= 1e-8 * (1.0 + b.abs());
+        let by_speed = Touch {
+            tol_w,
+            held_at_stop: [false; 2],
+        };
         let v = |m, from, c: [f64; 2], l: &[LinkState<f64>; 9], load| {
-            tw.violation(m, from, &c, l, &inputs(load), tol_w, [0.0; 2])
+            tw.violation(m, from, &c, l, &inputs(load), by_speed, [0.0; 2])
         };
         // A locked lever (I6): c6 = +5 N·m holds, c6 = -5 N·m pulls: violates by 5/106.
         assert_eq!(v(Mode::I6, Mode::I0, [5.0, 0.0], &at_rest, 100.0), 0.0);
@@ -383,6 +405,26 @@ mod tests {
         let mut off = links(6, 0.0, -3.0 * d);
         off[8].omega = 1.0;
         assert!(close(v(Mode::A6, Mode::I6, [1.0, 0.0], &off, 0.0), 1.0));
+
+        // A shaft stop (A68 -> I0) located a little past the stop: lever 8 still moves
+        // with the shaft's residual speed, 4e-5 rad/s against the drive direction (over
+        // `tol_w`), and accelerates in it (d·α8 = 2). By speed alone it is off the shaft
+        // and free to go; having held the shaft as it stopped, it touches it, and
+        // passing it violates by 2/2.
+        let stopping = links(8, -4e-5 * d, 2.0 * d);
+        assert_eq!(v(Mode::I0, Mode::A68, [0.0; 2], &stopping, 800.0), 0.0);
+        let at_stop = Touch {
+            tol_w,
+            held_at_stop: [true; 2],
+        };
+        let load = inputs(800.0);
+        let c = [0.0; 2];
+        let held = tw.violation(Mode::I0, Mode::A68, &c, &stopping, &load, at_stop, [0.0; 2]);
+        assert!(close(held, 1.0), "{held}");
+        // Accelerating against the drive direction, it lets go.
+        let leaving = links(8, -4e-5 * d, -2.0 * d);
+        let free = tw.violation(Mode::I0, Mode::A68, &c, &leaving, &load, at_stop, [0.0; 2]);
+        assert_eq!(free, 0.0);
     }
 
     /// The screen's torques stand for the kinetostatics' only when clear of the
