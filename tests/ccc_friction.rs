@@ -10,7 +10,7 @@ use structomat::ccc::{
     FRICTION_JOINT_NAMES,
 };
 use structomat::motor::Motor;
-use structomat::scalar::Vec2;
+use structomat::scalar::{Real, Vec2};
 use structomat::ModelError;
 
 /// Index of joint `name` in [`FRICTION_JOINTS`].
@@ -233,6 +233,17 @@ fn dissipated_work_is_the_joints_friction_from_finite_differences() {
     assert!(a.residual().abs() <= 1e-6 * a.motor_work, "{a:?}");
 }
 
+/// SPEC's converter with a real machine's losses at every joint: viscous 0.02
+/// N·m·s/rad, Coulomb 0.05 N·m, clutch drag 0.05 N·m·s/rad (`examples/steps.rs`'s
+/// `STEPS_FRICTION`).
+fn with_losses<T: Real>() -> CccParams<T> {
+    let mut p = CccParams::<T>::reference();
+    p.friction.viscous = [T::c(0.02); 9];
+    p.friction.coulomb = [T::c(0.05); 9];
+    p.friction.clutch_drag = T::c(0.05);
+    p
+}
+
 /// S2's inputs: 12 N·m on the crank, T_r = 800 N·m.
 const S2: Inputs<f64> = Inputs {
     motor: MotorInput::Law(Motor::Constant(12.0)),
@@ -259,10 +270,7 @@ fn s2_with_friction_closes_its_energy_audit() {
     let load = 800.0 * ideal.shaft_angle().abs();
     println!("ideal S2: {:?}, T_r x shaft turn {load}", ideal.audit());
     assert!((ideal.audit().load_work - load).abs() <= 1e-6 * load);
-    let mut p = CccParams::<f64>::reference();
-    p.friction.viscous = [0.02; 9];
-    p.friction.coulomb = [0.05; 9];
-    p.friction.clutch_drag = 0.05;
+    let p = with_losses::<f64>();
     let inputs = S2;
     let s = TwinSettings::reference(1e-4);
     let mut twin = Twin::new(p, s, inputs).expect("the converter sets up");
@@ -301,10 +309,7 @@ fn s2_with_friction_closes_its_energy_audit() {
 /// the step of 1e-4 s does not make.
 #[test]
 fn shaft_stops_with_friction_at_the_loop_step_keep_the_events() {
-    let mut p = CccParams::<f64>::reference();
-    p.friction.viscous = [0.02; 9];
-    p.friction.coulomb = [0.05; 9];
-    p.friction.clutch_drag = 0.05;
+    let p = with_losses::<f64>();
     for (motor, load) in [(8.0, 1000.0), (12.0, 1200.0)] {
         let inputs = Inputs {
             motor: MotorInput::Law(Motor::Constant(motor)),
@@ -436,10 +441,7 @@ fn clutch_drag_dissipates_its_slip_power() {
 /// 6e-8; the f64 run's losses are matched to 1e-3).
 #[test]
 fn f32_twin_runs_s2_with_friction() {
-    let mut p = CccParams::<f32>::reference();
-    p.friction.viscous = [0.02; 9];
-    p.friction.coulomb = [0.05; 9];
-    p.friction.clutch_drag = 0.05;
+    let p = with_losses::<f32>();
     let inputs = Inputs {
         motor: MotorInput::Law(Motor::Constant(12.0f32)),
         load: 800.0f32,
