@@ -300,51 +300,88 @@ fn s2_with_friction_closes_its_energy_audit() {
 }
 
 /// Every loss on (as in [`s2_with_friction_closes_its_energy_audit`]) at the 1 kHz
-/// loop's step, against the same second at h = 1e-4 s: the same events in the same
-/// order, each within 1e-4 s, the audit under 1e-6 of the motor's work at every step.
-/// At 8/1000 N·m the shaft stops in A68 at 0.360 s and lever 8 keeps it held (I8); at
+/// loop's step, against the same second at h = 1e-4 s ([`loop_step_events`]). At
+/// 8/1000 N·m the shaft stops in A68 at 0.360 s and lever 8 keeps it held (I8); at
 /// 12/1200 N·m both do (jam, 0.305 s). At 1 ms the state of those stops lies a little
 /// past them, the levers moving 4e-5 rad/s away from the stopped shaft: taken by its
 /// speed alone, lever 8 was let go (I0) and caught again 3 µs later, two events that
 /// the step of 1e-4 s does not make.
 #[test]
 fn shaft_stops_with_friction_at_the_loop_step_keep_the_events() {
-    let p = with_losses::<f64>();
     for (motor, load) in [(8.0, 1000.0), (12.0, 1200.0)] {
-        let inputs = Inputs {
-            motor: MotorInput::Law(Motor::Constant(motor)),
-            load,
-            measured: None,
-        };
-        let events = |h: f64| {
-            let mut twin = Twin::new(p, TwinSettings::reference(h), inputs).expect("set up");
-            let mut events: Vec<(EventKind, Mode, f64)> = Vec::new();
-            for _ in 0..(1.0 / h).round() as u64 {
-                twin.step(&inputs).expect("a step with friction");
-                events.extend(twin.events().iter().map(|e| (e.kind, e.to, e.time)));
-                let a = twin.audit();
-                let rel = a.residual().abs() / a.motor_work.abs().max(1.0);
-                assert!(rel < 1e-6, "{motor}/{load} N·m, h = {h}: audit {rel:e}");
-            }
-            events
-        };
-        let (fine, step) = (events(1e-4), events(1e-3));
-        let kinds = |e: &[(EventKind, Mode, f64)]| -> Vec<(EventKind, Mode)> {
-            e.iter().map(|x| (x.0, x.1)).collect()
-        };
-        assert_eq!(kinds(&fine), kinds(&step), "{motor}/{load} N·m");
+        let events = loop_step_events(with_losses(), motor, load, 1e-4);
         assert!(
-            fine.iter()
+            events
+                .iter()
                 .any(|e| e.0 == EventKind::ShaftStop && e.1 != Mode::I0),
-            "{motor}/{load} N·m: a shaft stop held by a lever: {fine:?}"
+            "{motor}/{load} N·m: a shaft stop held by a lever: {events:?}"
         );
-        for (a, b) in fine.iter().zip(&step) {
-            assert!(
-                (a.2 - b.2).abs() < 1e-4,
-                "{motor}/{load} N·m: {a:?} vs {b:?}"
-            );
-        }
     }
+}
+
+/// Two event functions of different units that cross inside one step: with every
+/// loss on and a shaft of 0.5 kg·m² at 16/800 N·m, lever 6's clutch torque (N·m) and
+/// the shaft's speed (rad/s) both cross in the step of 1 ms that ends at 0.657 s, the
+/// shaft's stop first (0.656554 s at h = 1e-4 s). Located on the larger of the two as
+/// they were, the iteration spent its 16 evaluations and placed the crossing to 8 % of
+/// the step (and to 1 % at 1e-4 s), past the stop: the twin released lever 6 instead
+/// and went on in another sequence. Each over its rise across the step, it is located
+/// to the tolerance: the same events at both steps, each within 1e-5 s.
+#[test]
+fn a_torque_and_a_speed_crossing_in_one_step_are_told_apart() {
+    let mut p = with_losses::<f64>();
+    p.shaft_inertia = 0.5;
+    let events = loop_step_events(p, 16.0, 800.0, 1e-5);
+    let stop = events
+        .iter()
+        .find(|e| (e.2 - 0.656554).abs() < 1e-5)
+        .expect("an event at 0.656554 s");
+    assert_eq!(
+        (stop.0, stop.1),
+        (EventKind::ShaftStop, Mode::I8),
+        "{events:?}"
+    );
+}
+
+/// The converter `p` for a second under `motor`/`load` N·m at h = 1 ms and at
+/// h = 1e-4 s: the same events in the same order, each within `within` s, the audit
+/// under 1e-6 of the motor's work at every step of both. Returns the events at 1e-4 s
+/// (kind, mode entered, time).
+fn loop_step_events(
+    p: CccParams<f64>,
+    motor: f64,
+    load: f64,
+    within: f64,
+) -> Vec<(EventKind, Mode, f64)> {
+    let inputs = Inputs {
+        motor: MotorInput::Law(Motor::Constant(motor)),
+        load,
+        measured: None,
+    };
+    let events = |h: f64| {
+        let mut twin = Twin::new(p, TwinSettings::reference(h), inputs).expect("set up");
+        let mut events: Vec<(EventKind, Mode, f64)> = Vec::new();
+        for _ in 0..(1.0 / h).round() as u64 {
+            twin.step(&inputs).expect("a step with friction");
+            events.extend(twin.events().iter().map(|e| (e.kind, e.to, e.time)));
+            let a = twin.audit();
+            let rel = a.residual().abs() / a.motor_work.abs().max(1.0);
+            assert!(rel < 1e-6, "{motor}/{load} N·m, h = {h}: audit {rel:e}");
+        }
+        events
+    };
+    let (fine, step) = (events(1e-4), events(1e-3));
+    let kinds = |e: &[(EventKind, Mode, f64)]| -> Vec<(EventKind, Mode)> {
+        e.iter().map(|x| (x.0, x.1)).collect()
+    };
+    assert_eq!(kinds(&fine), kinds(&step), "{motor}/{load} N·m");
+    for (a, b) in fine.iter().zip(&step) {
+        assert!(
+            (a.2 - b.2).abs() < within,
+            "{motor}/{load} N·m: {a:?} vs {b:?}"
+        );
+    }
+    fine
 }
 
 /// Bad coefficients are refused by the parameters' validation, named by their run-file
