@@ -396,19 +396,20 @@ fn crossing_estimate<T: Real>(
     .filter(|r| r.finite())
 }
 
-/// The fired event functions of a step, the iteration's function their largest. One
-/// alone is taken as it is. Several, each over its rise across the step: a speed
-/// (rad/s) and a torque (N·m) that fire in one step differ in scale by 1e3 to 1e5
-/// near their crossings, and regula falsi on the larger of them as they are placed
-/// its points next to the end where the speed stood, halving the torque's value
-/// there (Illinois) one evaluation at a time. With friction at every joint at
-/// h = 1 ms, such pairs (a catch and a breakaway, a release and a shaft stop) spent
-/// the 16 evaluations and were located to 8 % of the step, where the one function
-/// alone takes 1 to 3; over its rise, each is about θ less its crossing's θ, and the
-/// largest crosses 0 at the first of them.
+/// The fired event functions of a step as the iteration sees them: their largest. One
+/// function alone is taken as it is. Several are each divided by their rise across
+/// the step, so that each is about θ less its crossing's θ and the largest crosses 0
+/// at the first crossing. As they are, a speed (rad/s) and a torque (N·m) differ in
+/// scale by 1e3 to 1e5 near their crossings: regula falsi on the larger placed its
+/// points next to the end where the speed was the larger, and Illinois halved the
+/// torque's value at the other end one evaluation at a time. With friction at every
+/// joint at h = 1 ms such pairs (a catch and a breakaway, a release and a shaft stop)
+/// used up the 16 evaluations and were placed to 8 % of the step; divided, they take
+/// 2 to 7.
 struct Normalized<T> {
+    /// The functions that fired.
     fired: Fired,
-    /// Each function's factor (its index `Guard as usize`): 1 over its rise, or 1.
+    /// Each function's factor (index `Guard as usize`): 1 over its rise, or 1.
     factor: [T; 6],
     /// Its rise across the step, in its units.
     chord: [T; 6],
