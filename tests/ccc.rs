@@ -13,7 +13,7 @@ use structomat::motor::Motor;
 use structomat::scalar::{cross, Vec2};
 use structomat::transmission::evaluate;
 use structomat::workspace::Workspace;
-use structomat_suite::{assert_close, central_diff4, pose, unwrap_near};
+use structomat_suite::{assert_close, central_diff4, check_free_levers, pose, unwrap_near};
 
 const T_R: f64 = 800.0;
 
@@ -406,11 +406,13 @@ impl Oracles {
 
 /// SPEC 3's laws of the diode in the twin's current state: in I modes locked levers
 /// push (c ≥ 0) and a held shaft carries at most T_r (Σc ≤ T_r); in A modes engaged
-/// levers push (c ≥ 0) and, with J_s = 0, carry exactly T_r; every output is finite.
+/// levers push (c ≥ 0) and, with J_s = 0, carry exactly T_r; no free lever moves past
+/// the shaft in the drive direction; every output is finite.
 /// What the twin sets by its construction (a locked lever's speed, a free lever's
 /// zero torque, a held shaft's zero speed, jam at rest) is checked by `Oracles`
 /// against the joints' motion, the power and the global balance instead.
 fn check_laws(twin: &Twin<f64>, load: f64) {
+    check_free_levers(twin);
     let mode = twin.mode();
     let c = twin.clutch_torques();
     let tol_c = 1e-6 * (load + 1.0);

@@ -6,12 +6,13 @@
 //! energy audit closing on S2 with every loss on.
 
 use structomat::ccc::{
-    CccParams, EventKind, Friction, Inputs, Mode, MotorInput, Twin, TwinSettings, FRICTION_JOINTS,
-    FRICTION_JOINT_NAMES,
+    CccParams, DriveDirection, EventKind, Friction, Inputs, Mode, MotorInput, Twin, TwinSettings,
+    FRICTION_JOINTS, FRICTION_JOINT_NAMES,
 };
 use structomat::motor::Motor;
 use structomat::scalar::{Real, Vec2};
 use structomat::ModelError;
+use structomat_suite::check_free_levers;
 
 /// Index of joint `name` in [`FRICTION_JOINTS`].
 fn joint(name: &str) -> usize {
@@ -343,10 +344,36 @@ fn a_torque_and_a_speed_crossing_in_one_step_are_told_apart() {
     );
 }
 
+/// A lever that held the shaft and is let go at a lever's catch may leave the impact a
+/// little faster than the shaft in the drive direction, and its catch function, past 0
+/// from the start, would never cross it: with every loss, J_s = 0.5 kg·m² and the
+/// drive counter-clockwise at 22/200 N·m, lever 8's catch at 0.4437 s (lever 6 locked,
+/// the mechanism creeping at 1e-3 rad/s) took I8 at h = 1 ms, and lever 6 ran 15 ms
+/// through its clutch, up to 0.44 rad/s past the held shaft, where h = 1e-4 s breaks
+/// the shaft away (A68). SPEC 3 at every step ([`check_free_levers`]), and the events of
+/// h = 1e-4 s.
+#[test]
+fn a_lever_let_go_at_a_catch_does_not_pass_the_shaft() {
+    let mut p = with_losses::<f64>();
+    p.shaft_inertia = 0.5;
+    p.drive = DriveDirection::Ccw;
+    let events = loop_step_events(p, 22.0, 200.0, 1e-4);
+    let catch = events
+        .iter()
+        .find(|e| (e.2 - 0.4437).abs() < 1e-4)
+        .expect("an event at 0.4437 s");
+    assert_eq!(
+        (catch.0, catch.1),
+        (EventKind::Catch(8), Mode::A68),
+        "{events:?}"
+    );
+}
+
 /// The converter `p` for a second under `motor`/`load` N·m at h = 1 ms and at
 /// h = 1e-4 s: the same events in the same order, each within `within` s, the audit
-/// under 1e-6 of the motor's work at every step of both. Returns the events at 1e-4 s
-/// (kind, mode entered, time).
+/// under 1e-6 of the motor's work and no free lever past the shaft
+/// ([`check_free_levers`]) at every step of both. Returns the events at 1e-4 s (kind,
+/// mode entered, time).
 fn loop_step_events(
     p: CccParams<f64>,
     motor: f64,
@@ -367,6 +394,7 @@ fn loop_step_events(
             let a = twin.audit();
             let rel = a.residual().abs() / a.motor_work.abs().max(1.0);
             assert!(rel < 1e-6, "{motor}/{load} N·m, h = {h}: audit {rel:e}");
+            check_free_levers(&twin);
         }
         events
     };

@@ -7,6 +7,7 @@
 //! before and after.
 
 use structomat::ccc::{CccParams, Event, Inputs, Mode, MotorInput, Twin, TwinSettings};
+use structomat_suite::check_free_levers;
 
 const S2: Inputs<f64> = Inputs {
     motor: MotorInput::Torque(12.0),
@@ -88,6 +89,7 @@ fn a_coasting_shaft_with_no_load_keeps_its_energy() {
     let mut start: Option<f64> = None;
     while twin.time() < 0.4 {
         twin.step(&free).expect("a step without load");
+        check_free_levers(&twin);
         if twin.mode() != Mode::Coast {
             start = None;
             continue;
@@ -129,6 +131,7 @@ fn a_coasting_shaft_stops_under_its_brake_as_the_analytic_motion_says() {
             twin.shaft_angle(),
         );
         twin.step(&inputs).expect("a step of the braked shaft");
+        check_free_levers(&twin);
         if before.0 == Mode::Coast && twin.mode() == Mode::Coast {
             let rate = (twin.shaft_speed() - before.2) / h;
             // CW drive: the brake turns the shaft back CCW.

@@ -6,6 +6,7 @@
 
 use structomat::ccc::{CccParams, Event, Inputs, MotorInput, Twin, TwinSettings, TwinStepError};
 use structomat::motor::Motor;
+use structomat_suite::check_free_levers;
 
 /// What a run logged.
 struct Run {
@@ -39,6 +40,7 @@ fn run(params: CccParams<f64>, h: f64, load: f64, motor: f64, t_end: f64) -> Run
             break;
         }
         out.events.extend_from_slice(twin.events());
+        check_free_levers(&twin);
         let a = twin.audit();
         if a.motor_work > 1.0 {
             out.max_rel_residual = out

@@ -1,6 +1,8 @@
 //! Shared test oracles for the top-level tests and benches: tolerant comparison,
-//! 4th-order central differences (thesis eq. 5.12-5.13) and the stacked pose `P`.
+//! 4th-order central differences (thesis eq. 5.12-5.13), the stacked pose `P` and
+//! SPEC 3's law on the converter's free levers.
 
+use structomat::ccc::{Clutch, Mode, Twin};
 use structomat::config::POSE_ROWS;
 use structomat::model::Model;
 use structomat::workspace::Workspace;
@@ -61,6 +63,28 @@ pub fn pose(model: &Model<f64>, ws: &Workspace<f64>, reference: Option<&[f64]>) 
 pub fn unwrap_near(a: f64, reference: f64) -> f64 {
     reference + (a - reference + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU)
         - std::f64::consts::PI
+}
+
+/// SPEC 3: a free lever does not move past the shaft in the drive direction (it would
+/// catch it): `d·(ω_k − ω_s)` within 1e-6 of the largest link speed (at least 1 rad/s).
+pub fn check_free_levers(twin: &Twin<f64>) {
+    if twin.mode() == Mode::Free {
+        return; // no diode: the levers are not tied to the shaft
+    }
+    let d: f64 = twin.params().drive.sign();
+    let scale = (1..=8).fold(1.0_f64, |m, p| m.max(twin.link(p).omega.abs()));
+    let shaft = twin.shaft_speed();
+    for (lever, clutch) in [6usize, 8].into_iter().zip(twin.mode().clutches()) {
+        if clutch == Clutch::Free {
+            let past = d * (twin.link(lever).omega - shaft);
+            assert!(
+                past <= 1e-6 * scale,
+                "t = {}: free lever {lever} {past:e} rad/s past the shaft in {}",
+                twin.time(),
+                twin.mode()
+            );
+        }
+    }
 }
 
 mod rng;

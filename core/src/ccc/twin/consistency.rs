@@ -58,8 +58,10 @@ impl<T: Real> Twin<T> {
     /// physical links' speeds and accelerations `links` violates SPEC 3's consistency
     /// conditions, each relative to its scale (0: consistent): c_k ≥ 0 for a locked or
     /// engaged lever, Σc_k ≤ T_r over the locked ones, a free lever touching the shaft
-    /// (as `touch` says) does not accelerate past it in the drive direction, a shaft
-    /// starting from rest
+    /// (as `touch` says) does not accelerate past it in the drive direction, a free
+    /// lever does not move past the shaft in the drive direction (by more than
+    /// `touch.tol_w`; its excess over the largest link speed), a shaft starting from
+    /// rest
     /// accelerates in the drive direction. `coast`: the shaft's speed (rad/s) and
     /// acceleration (rad/s²) if `m` is [`Mode::Coast`] (no lever carries it).
     #[allow(clippy::too_many_arguments)]
@@ -77,6 +79,7 @@ impl<T: Real> Twin<T> {
         let torque_scale = inputs.load + T::c(1.0) + c[0].abs() + c[1].abs();
         let tol_c = torque_tol(torque_scale);
         let alpha_scale = links.iter().fold(T::one(), |a, s| a.max(s.alpha.abs()));
+        let omega_scale = links.iter().fold(T::one(), |a, s| a.max(s.omega.abs()));
         let tol_a = T::c(1e-9) * alpha_scale;
         let coasting = m == Mode::Coast;
         let shaft_alpha = if coasting {
@@ -109,6 +112,15 @@ impl<T: Real> Twin<T> {
                         locked += d * drag * l.omega;
                     }
                     let rel_w = l.omega - shaft_w;
+                    // Nor may it move past it (that is a catch): a lever that held
+                    // the shaft before the event and is let go can leave the impact's
+                    // projection a little faster than the shaft, and its catch
+                    // function, past 0 from the start, would never cross it (with
+                    // friction and J_s = 0.5 kg·m², counter-clockwise at 22/200 N·m at
+                    // h = 1 ms, lever 6 ran 15 ms through its clutch in I8).
+                    if m != Mode::Free {
+                        v += (d * rel_w - touch.tol_w).max(T::zero()) / omega_scale;
+                    }
                     if rel_w.abs() <= touch.tol_w || touch.held_at_stop.get(k) == Some(&true) {
                         let rel = d * (l.alpha - shaft_alpha);
                         v += (rel - tol_a).max(T::zero()) / alpha_scale;
@@ -379,11 +391,31 @@ mod tests {
             v(Mode::I0, Mode::I0, [0.0; 2], &links(6, 0.0, -2.0 * d), 0.0),
             0.0
         );
-        // Not touching (ω6 off the shaft's by 1 rad/s): no condition on its α.
+        // Not touching (ω6 off the shaft's by 1 rad/s against the drive direction): no
+        // condition on its α.
         assert_eq!(
             v(Mode::I0, Mode::I0, [0.0; 2], &links(6, 1.0, 2.0 * d), 0.0),
             0.0
         );
+        // Moving past the held shaft in the drive direction (d·ω6 = 1e-4 rad/s, over
+        // `tol_w`) is a catch, not a free lever: (1e-4 - 1e-6) of the speed scale (1).
+        assert!(close(
+            v(
+                Mode::I0,
+                Mode::I0,
+                [0.0; 2],
+                &links(6, 1e-4 * d, -2.0 * d),
+                0.0
+            ),
+            1e-4 - 1e-6
+        ));
+        // Past it by 2 rad/s while the fastest link turns at 4: 2/4 more.
+        let mut fast = links(6, 2.0 * d, -2.0 * d);
+        fast[3].omega = 4.0;
+        assert!(close(
+            v(Mode::I0, Mode::I0, [0.0; 2], &fast, 0.0),
+            (2.0 - 1e-6) / 4.0
+        ));
         // The shaft starting from rest with lever 6 (I6 -> A6): α_s = α6 must be in the
         // drive direction; against it (d·α6 = -3) violates by 3/3. Lever 8, free and at
         // rest, touches the shaft there too and then passes it (d·(α8 - α_s) = 3): 3/3
