@@ -333,14 +333,9 @@ fn a_torque_and_a_speed_crossing_in_one_step_are_told_apart() {
     let mut p = with_losses::<f64>();
     p.shaft_inertia = 0.5;
     let events = loop_step_events(p, 16.0, 800.0, 1e-5);
-    let stop = events
-        .iter()
-        .find(|e| (e.2 - 0.656554).abs() < 1e-5)
-        .expect("an event at 0.656554 s");
     assert_eq!(
-        (stop.0, stop.1),
-        (EventKind::ShaftStop, Mode::I8),
-        "{events:?}"
+        event_at(&events, 0.656554, 1e-5),
+        (EventKind::ShaftStop, Mode::I8)
     );
 }
 
@@ -358,15 +353,20 @@ fn a_lever_let_go_at_a_catch_does_not_pass_the_shaft() {
     p.shaft_inertia = 0.5;
     p.drive = DriveDirection::Ccw;
     let events = loop_step_events(p, 22.0, 200.0, 1e-4);
-    let catch = events
-        .iter()
-        .find(|e| (e.2 - 0.4437).abs() < 1e-4)
-        .expect("an event at 0.4437 s");
     assert_eq!(
-        (catch.0, catch.1),
-        (EventKind::Catch(8), Mode::A68),
-        "{events:?}"
+        event_at(&events, 0.4437, 1e-4),
+        (EventKind::Catch(8), Mode::A68)
     );
+}
+
+/// The event of `events` (kind, mode entered, time) within `within` s of `t`: its kind
+/// and the mode it entered.
+fn event_at(events: &[(EventKind, Mode, f64)], t: f64, within: f64) -> (EventKind, Mode) {
+    let e = events
+        .iter()
+        .find(|e| (e.2 - t).abs() < within)
+        .unwrap_or_else(|| panic!("no event at {t} s: {events:?}"));
+    (e.0, e.1)
 }
 
 /// The converter `p` for a second under `motor`/`load` N·m at h = 1 ms and at
