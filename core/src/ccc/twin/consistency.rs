@@ -57,13 +57,12 @@ impl<T: Real> Twin<T> {
     /// How far mode `m` (entered from `from`) with the clutch torques `c` and the
     /// physical links' speeds and accelerations `links` violates SPEC 3's consistency
     /// conditions, each relative to its scale (0: consistent): c_k ≥ 0 for a locked or
-    /// engaged lever, Σc_k ≤ T_r over the locked ones, a free lever touching the shaft
-    /// (as `touch` says) does not accelerate past it in the drive direction, a free
-    /// lever does not move past the shaft in the drive direction (by more than
-    /// `touch.tol_w`; its excess over the largest link speed), a shaft starting from
-    /// rest
-    /// accelerates in the drive direction. `coast`: the shaft's speed (rad/s) and
-    /// acceleration (rad/s²) if `m` is [`Mode::Coast`] (no lever carries it).
+    /// engaged lever, Σc_k ≤ T_r over the locked ones, a free lever does not move past
+    /// the shaft in the drive direction (by more than `touch.tol_w`, relative to the
+    /// largest link speed) and, touching it (as `touch` says), does not accelerate
+    /// past it, a shaft starting from rest accelerates in the drive direction.
+    /// `coast`: the shaft's speed (rad/s) and acceleration (rad/s²) if `m` is
+    /// [`Mode::Coast`] (no lever carries it).
     #[allow(clippy::too_many_arguments)]
     pub(super) fn violation(
         &self,
