@@ -502,8 +502,14 @@ fn clutch_drag_dissipates_its_slip_power() {
 }
 
 /// The f32 twin (the firmware's) with every loss on runs S2's first second and keeps
-/// its audit within its own tolerance's reach: 1e-4 of the motor's work (f32 rounds at
-/// 6e-8; the f64 run's losses are matched to 1e-3).
+/// its audit within 5e-4 of the motor's work, and its losses within 0.5 % of the f64
+/// run's. Each f32 step closes its balance to f32's rounding floor (1.2e-4 of the
+/// energy scale): in A68 driven by the crank (a six-link group by Newton) a step's
+/// residual moves by up to 0.009 J, their sizes summing to 0.44 J over the second, and
+/// the audit is their random walk: 1.25e-5 of the motor's work with one version's
+/// bits, 1.96e-4 with the next's (a coordinate switch mapped by momentum; the same
+/// steps' sizes). A loss booked wrong is a systematic term: one joint's friction
+/// missing is ~3 J, 2.5e-2 of the motor's work.
 #[test]
 fn f32_twin_runs_s2_with_friction() {
     let p = with_losses::<f32>();
@@ -518,7 +524,7 @@ fn f32_twin_runs_s2_with_friction() {
             .expect("a step of S2 in f32 with friction");
     }
     let a = twin.audit();
-    assert!(a.residual().abs() <= 1e-4 * a.motor_work, "f32 audit {a:?}");
+    assert!(a.residual().abs() <= 5e-4 * a.motor_work, "f32 audit {a:?}");
     let losses = a.load_work - 800.0 * twin.shaft_angle().abs();
     println!("f32 S2 with friction: {a:?}, losses {losses} J");
     // Regression value: the f64 run's losses, 25.2549 J, as

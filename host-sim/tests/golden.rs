@@ -96,19 +96,19 @@ const PINS: &[Pin<'static>] = &[
     Pin {
         args: "ccc-s2",
         exit: 0,
-        csv: "d285fa22101ea0fd9015ae84598574da8eb9667f98bea42667587dee6ee71097",
+        csv: "f9b77ebe63c6402c8fe688370243f89311cd1f41b4ec54e40e2fbd96c9651318",
         logs: Some((
-            "3354651171d184d2cd5c6dc606af782396d767a464f782db99638e21c2c632bd",
-            "362fb3dec856e533a01179d1d99f4fbc79947a49c588136fd8cdba5f1a82e4b7",
+            "d36daced7b9890667fc88f89a90f516946a8e0e91961604ae5c3ce6fccac5406",
+            "764d79c80e4e24e1642e2917678102e180a0c8ac87b763aaf8d8766271eb7c14",
         )),
     },
     Pin {
         args: "ccc-s2 --ccw",
         exit: 0,
-        csv: "79f70c1614b20af5e6757a33089489f0e7a554d91e66c3332c8b10b485c60f3d",
+        csv: "8cec3eeb51ea8602914aa11e88dbf4724beac5efd4565f04caad274568f99696",
         logs: Some((
-            "40866bc4acdc27412e75fc8d14cbc4d72f9fd08b55eba4e91064baccaeeb8250",
-            "0400ffeaa82e5ecd00178481188f76ffb57d000da7989d41b7a3c8b7d1fa02af",
+            "b0428941aaffce48260dd7423fa6a5ea31cb00ca9499cc63117160aaa9010480",
+            "3a9619f5a8f59459c350a475909e772f2f2023b80fad4406eaa2c03b52fd17a2",
         )),
     },
     Pin {
@@ -129,10 +129,10 @@ const PINS: &[Pin<'static>] = &[
     Pin {
         args: "ccc-s2 --f32",
         exit: 0,
-        csv: "bf4fb3b02ecada7c618e74612dc9398dcd9c600a15c10c54d394f7d1c3f40679",
+        csv: "e2e32b169894360a7692d1177494f5906bd6f894e8c4cacbd7e44f804d623822",
         logs: Some((
-            "ad7c16517da81b72dad0dda165a90d567ec9fdcf9b462aab104d846b83a7e0e7",
-            "4d909b94acde012266875e4d515e8d1b0318f22de88040e055bf69a182e09bc7",
+            "08d0b3d94cef65c024903893e7f31b3619455c52ae0cdbf34c412c2cc5996e13",
+            "99715c7df387733c960831f25d6518894969cd34c0fa88c861cc88b33d263fb6",
         )),
     },
 ];

@@ -15,6 +15,7 @@
 
 use super::super::build::{BRANCHES, CRANK};
 use super::super::mode::{Clutch, Mode};
+use super::coordinates::Rates;
 use super::correction::Correction;
 use super::error::TwinStepError;
 use super::spread::Pending;
@@ -115,7 +116,7 @@ impl<T: Real> Twin<T> {
         self.state_evaluated = false;
         let g0 = self.guards;
         let mut w = self.work_from_state();
-        let result = self.adopt_scratch(&mut w, &inputs, &q, &links);
+        let result = self.adopt_scratch(&mut w, &inputs, &q, &links, Rates::OfTheirLinks);
         if result.is_err() || !g0.fired(&self.guards).is_empty() {
             self.restore(w.switched, &saved);
             return result.map(|()| Correction::none());
