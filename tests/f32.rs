@@ -328,3 +328,55 @@ fn s1_f32_ends_at_the_diode_singularity_like_f64() {
     assert!(closing.iter().all(|c| *c < 32.0 * 1e-4), "{closing:?}");
     assert!(e32.to_string().contains("in line in"), "{e32}");
 }
+
+/// At a light load f32 at h = 1 ms refuses a step near the dead points of A68's
+/// coordinates, and says why: its energy jump does not fall with the sub-steps (a
+/// rounding floor, not the step's size), where f64 runs the same point through with the
+/// events of h = 1e-4 s (README, "Across operating points"). 20/200 N·m (motor / load):
+/// after lever 8's catch into A68 at 0.2224 s the coordinates' conditioning falls to
+/// 0.05; f32's step at 0.241 s breaks the balance by 4.4 and 2.0 tolerances in 32 and 64
+/// sub-steps, where DP5's truncation error would fall 32-fold.
+#[test]
+fn f32_names_its_rounding_floor_near_a_dead_point_where_f64_runs_on() {
+    fn run<T: Real>() -> (Option<TwinStepError>, f64) {
+        let inputs = Inputs {
+            motor: MotorInput::Law(Motor::Constant(T::c(20.0))),
+            load: T::c(200.0),
+            measured: None,
+        };
+        let settings = TwinSettings::reference(T::c(1e-3));
+        let mut twin = Twin::new(CccParams::<T>::reference(), settings, inputs).unwrap();
+        for _ in 0..300 {
+            if let Err(e) = twin.step(&inputs) {
+                return (Some(e), twin.time().to_f64());
+            }
+        }
+        (None, twin.time().to_f64())
+    }
+    let (e64, t64) = run::<f64>();
+    assert!(e64.is_none(), "f64: {e64:?}");
+    assert!((t64 - 0.3).abs() < 1e-9, "{t64}");
+    let (e32, t32) = run::<f32>();
+    let e32 = e32.expect("f32 refuses a step after the catch into A68");
+    let TwinStepError::Diverged {
+        time,
+        substeps,
+        stalled,
+        ..
+    } = e32
+    else {
+        panic!("not an energy balance broken: {e32}");
+    };
+    // The last good state is kept: the refused step starts there.
+    assert!(
+        (time - t32).abs() < 1e-6 && time > 0.2224,
+        "{time} vs {t32}"
+    );
+    assert_eq!(substeps, 64, "{e32}");
+    assert!(stalled && !e32.at_singularity(), "{e32}");
+    let msg = e32.to_string();
+    assert!(
+        msg.contains("did not fall with the sub-steps") && !msg.contains("too coarse"),
+        "{msg}"
+    );
+}

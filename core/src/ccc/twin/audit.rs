@@ -182,6 +182,8 @@ impl<T: Real> Twin<T> {
                     conditioning: conditioning.to_f64(),
                 },
             },
+            // One attempt alone shows no trend: the rungs set it ([`Twin::climb`]).
+            stalled: false,
         })
     }
 }
