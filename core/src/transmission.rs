@@ -159,46 +159,77 @@ pub fn evaluate_velocities<T: Real, C: Capacity<T>>(
         }
         return Ok(());
     }
-    // Speeds are linear in q̇: the actual COG speeds are V q̇ (its live rows), and each
-    // frame origin's follows as v_o = v_G - ω J R(θ) c (no further velocity pass).
-    for (i, (l, b)) in model
+    // Speeds are linear in q̇: the actual COG speeds are V q̇ (its live rows), summed
+    // column by column into the bodies, and each frame origin's follows as
+    // v_o = v_G - ω J R(θ) c (no further velocity pass).
+    if m == 0 {
+        for b in body.iter_mut().skip(1).take(nb - 1) {
+            (b.v, b.omega) = (Vec2::zeros(), T::zero());
+        }
+    } else {
+        for (j, (col, r)) in v
+            .as_slice()
+            .chunks_exact(POSE_ROWS)
+            .zip(&rates)
+            .enumerate()
+            .take(m)
+        {
+            for (b, rows) in body
+                .iter_mut()
+                .skip(1)
+                .take(nb - 1)
+                .zip(col.chunks_exact(3))
+            {
+                if let [x, y, w] = rows {
+                    let (x, y, w) = (*x * *r, *y * *r, *w * *r);
+                    (b.v, b.omega) = if j == 0 {
+                        (Vec2::new(x, y), w)
+                    } else {
+                        (Vec2::new(b.v.x + x, b.v.y + y), b.omega + w)
+                    };
+                }
+            }
+        }
+    }
+    for (l, b) in model
         .links()
         .iter()
         .zip(body.iter_mut().skip(1))
-        .enumerate()
         .take(nb - 1)
     {
-        let row = |k: usize| times_rates(v, k, &rates, m);
-        let (vx, vy, w) = (row(3 * i), row(3 * i + 1), row(3 * i + 2));
-        b.omega = w;
-        b.v = Vec2::new(vx, vy) - perp(&rotate_cs(b.c, b.s, &l.cog)) * w;
+        b.v -= perp(&rotate_cs(b.c, b.s, &l.cog)) * b.omega;
     }
     for gd in group.iter_mut().take(model.groups().len()) {
         let GroupData { xd, dx_dq, .. } = gd;
-        for (k, dst) in xd.iter_mut().enumerate() {
-            *dst = times_rates(dx_dq, k, &rates, m);
-        }
+        times_rates(dx_dq, &rates, m, xd);
     }
     Ok(())
 }
 
-/// `Σ_j m_kj q̇_j`: row `k` of `V` or `C` times the rates, summed over the first
-/// `cols` columns (the degrees of freedom) in order, as nalgebra's matrix-vector
-/// product does (the padding columns' rates are zero: they add nothing).
+/// `out = M q̇` over the first `cols` columns of the column-major `M` (`C`'s): each
+/// row summed in the columns' order, as nalgebra's matrix-vector product does (the
+/// padding columns' rates are zero: they add nothing); zeros for no column.
 #[inline]
 fn times_rates<T: Real, const R: usize>(
     m: &SMatrix<T, R, MAX_DOF>,
-    k: usize,
     rates: &[T; MAX_DOF],
     cols: usize,
-) -> T {
-    let mut terms = rates
-        .iter()
+    out: &mut [T],
+) {
+    if cols == 0 {
+        out.fill(T::zero());
+    }
+    for (j, (col, r)) in m
+        .as_slice()
+        .chunks_exact(R)
+        .zip(rates)
         .enumerate()
         .take(cols)
-        .map(|(j, r)| m.get((k, j)).copied().unwrap_or(T::zero()) * *r);
-    let first = terms.next().unwrap_or(T::zero());
-    terms.fold(first, |acc, t| acc + t)
+    {
+        for (o, x) in out.iter_mut().zip(col) {
+            *o = if j == 0 { *x * *r } else { *o + *x * *r };
+        }
+    }
 }
 
 /// Second derivatives `∂²P/∂q_j∂q_k` (into `pose`) and `∂²x/∂q_j∂q_k` of every group
