@@ -159,45 +159,21 @@ pub fn evaluate_velocities<T: Real, C: Capacity<T>>(
         }
         return Ok(());
     }
-    // Speeds are linear in q̇: the actual COG speeds are V q̇ (its live rows), summed
-    // column by column into the bodies, and each frame origin's follows as
-    // v_o = v_G - ω J R(θ) c (no further velocity pass).
-    if m == 0 {
-        for b in body.iter_mut().skip(1).take(nb - 1) {
-            (b.v, b.omega) = (Vec2::zeros(), T::zero());
-        }
-    } else {
-        for (j, (col, r)) in v
-            .as_slice()
-            .chunks_exact(POSE_ROWS)
-            .zip(&rates)
-            .enumerate()
-            .take(m)
-        {
-            for (b, rows) in body
-                .iter_mut()
-                .skip(1)
-                .take(nb - 1)
-                .zip(col.chunks_exact(3))
-            {
-                if let [x, y, w] = rows {
-                    let (x, y, w) = (*x * *r, *y * *r, *w * *r);
-                    (b.v, b.omega) = if j == 0 {
-                        (Vec2::new(x, y), w)
-                    } else {
-                        (Vec2::new(b.v.x + x, b.v.y + y), b.omega + w)
-                    };
-                }
-            }
-        }
-    }
-    for (l, b) in model
+    // Speeds are linear in q̇: the actual COG speeds are V q̇, and each frame origin's
+    // follows as v_o = v_G - ω J R(θ) c (no further velocity pass).
+    let mut vq = [T::zero(); POSE_ROWS];
+    times_rates(v, &rates, m, &mut vq);
+    for ((l, b), rows) in model
         .links()
         .iter()
         .zip(body.iter_mut().skip(1))
         .take(nb - 1)
+        .zip(vq.chunks_exact(3))
     {
-        b.v -= perp(&rotate_cs(b.c, b.s, &l.cog)) * b.omega;
+        if let [vx, vy, w] = rows {
+            b.omega = *w;
+            b.v = Vec2::new(*vx, *vy) - perp(&rotate_cs(b.c, b.s, &l.cog)) * *w;
+        }
     }
     for gd in group.iter_mut().take(model.groups().len()) {
         let GroupData { xd, dx_dq, .. } = gd;
@@ -206,9 +182,10 @@ pub fn evaluate_velocities<T: Real, C: Capacity<T>>(
     Ok(())
 }
 
-/// `out = M q̇` over the first `cols` columns of the column-major `M` (`C`'s): each
-/// row summed in the columns' order, as nalgebra's matrix-vector product does (the
-/// padding columns' rates are zero: they add nothing); zeros for no column.
+/// `out = M q̇` over the first `cols` columns of the column-major `M` (`V` or `C`),
+/// column by column over their slices: each row summed in the columns' order, as
+/// nalgebra's matrix-vector product does (the padding columns' rates are zero: they
+/// add nothing); zeros for no column.
 #[inline]
 fn times_rates<T: Real, const R: usize>(
     m: &SMatrix<T, R, MAX_DOF>,
