@@ -333,9 +333,11 @@ fn s1_f32_ends_at_the_diode_singularity_like_f64() {
 /// coordinates, and says why: its energy jump does not fall with the sub-steps (a
 /// rounding floor, not the step's size), where f64 runs the same point through with the
 /// events of h = 1e-4 s (README, "Across operating points"). 20/200 N·m (motor / load):
-/// after lever 8's catch into A68 at 0.2224 s the coordinates' conditioning falls to
-/// 0.05; f32's step at 0.241 s breaks the balance by 4.4 and 2.0 tolerances in 32 and 64
-/// sub-steps, where DP5's truncation error would fall 32-fold.
+/// after lever 8's catch into A68 at 0.2224 s the crank turns up to 75 times faster than
+/// the levers whose angle drives the mode, so one ulp of that angle moves the kinetic
+/// energy by about f32's tolerance; f32's step at 0.241 s breaks the balance by 4.4 and
+/// 2.0 tolerances in 32 and 64 sub-steps, where DP5's truncation error would fall
+/// 32-fold.
 #[test]
 fn f32_names_its_rounding_floor_near_a_dead_point_where_f64_runs_on() {
     fn run<T: Real>() -> (Option<TwinStepError>, f64) {
