@@ -96,19 +96,19 @@ const PINS: &[Pin<'static>] = &[
     Pin {
         args: "ccc-s2",
         exit: 0,
-        csv: "f9b77ebe63c6402c8fe688370243f89311cd1f41b4ec54e40e2fbd96c9651318",
+        csv: "c5220b8cf7fa222305373148b2591bcd4e9edd04c33f20503d5d82b1d5955ffa",
         logs: Some((
-            "d36daced7b9890667fc88f89a90f516946a8e0e91961604ae5c3ce6fccac5406",
-            "764d79c80e4e24e1642e2917678102e180a0c8ac87b763aaf8d8766271eb7c14",
+            "f0685a912b9e10742cbad92054e38c07d490577af130eee89a9d7fdfdcfe1244",
+            "83e8472c982508bdc4062a2ed86d3d3d318487711b58ec6d9cf8bafecf034907",
         )),
     },
     Pin {
         args: "ccc-s2 --ccw",
         exit: 0,
-        csv: "8cec3eeb51ea8602914aa11e88dbf4724beac5efd4565f04caad274568f99696",
+        csv: "3523c3e2cda32d751a937b1516cb248a090efa54a55e7ec032bbd63d44ccc38e",
         logs: Some((
-            "b0428941aaffce48260dd7423fa6a5ea31cb00ca9499cc63117160aaa9010480",
-            "3a9619f5a8f59459c350a475909e772f2f2023b80fad4406eaa2c03b52fd17a2",
+            "f2ab28ba80baedfb11a6256415900e137765474446899c0212646f1851f16ea4",
+            "55e2b79936ae19cb61b7e61637efd3e36b56b8278e5e0d0d5815d0bac7b97b16",
         )),
     },
     Pin {
@@ -129,7 +129,7 @@ const PINS: &[Pin<'static>] = &[
     Pin {
         args: "ccc-s2 --f32",
         exit: 0,
-        csv: "e2e32b169894360a7692d1177494f5906bd6f894e8c4cacbd7e44f804d623822",
+        csv: "1ad7277eccf72665ae724464481993257ebbebdaa230a41cd434ac90cdbd5109",
         logs: Some((
             "08d0b3d94cef65c024903893e7f31b3619455c52ae0cdbf34c412c2cc5996e13",
             "99715c7df387733c960831f25d6518894969cd34c0fa88c861cc88b33d263fb6",
