@@ -334,6 +334,8 @@ impl<T: Real> Twin<T> {
             kind.name(),
             self.slots.cur().coords
         );
+        // Another mode, other coordinates: none is barred ([`Twin::broke_in`]).
+        self.broke_in = None;
         let _ = self.events.push(Event {
             time: w.t,
             kind,

@@ -80,6 +80,7 @@ impl<T: Real> Twin<T> {
             may_catch_up: false,
             behind: false,
             state_evaluated: false,
+            broke_in: None,
         };
         twin.start_at(&q, &pose, &inputs)?;
         Ok(twin)
@@ -173,6 +174,7 @@ impl<T: Real> Twin<T> {
             addr_of_mut!((*p).may_catch_up).write(false);
             addr_of_mut!((*p).behind).write(false);
             addr_of_mut!((*p).state_evaluated).write(false);
+            addr_of_mut!((*p).broke_in).write(None);
             place.assume_init_mut()
         }
     }
@@ -282,5 +284,6 @@ fn fields_of<T: Real>(t: &Twin<T>) {
         may_catch_up: _,
         behind: _,
         state_evaluated: _,
+        broke_in: _,
     } = t;
 }

@@ -82,6 +82,23 @@ pub(super) enum Take {
     KeepAndStop,
 }
 
+/// Why the twin looks for another choice of the mode's coordinates
+/// ([`Twin::switch_coordinates`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) enum Leave {
+    /// The current choice nears its dead point: another is taken if it is conditioned
+    /// 1.5 times better, not one a step left because its balance broke there
+    /// ([`Twin::redo_in_other_coordinates`]).
+    IfBetter,
+    /// The current choice failed to assemble: any other that assembles is taken, and
+    /// if none does, the error names every choice's failing group.
+    Failed(StepError),
+    /// A step's energy balance broke in the current choice on every rung
+    /// ([`Twin::redo_in_other_coordinates`]): the best conditioned other choice that
+    /// assembles is taken, if there is one.
+    BalanceBroke,
+}
+
 /// Assembles `mode` at `pose` in each of its coordinate choices but those `skip` names, in order
 /// (repositioning a slot that holds the choice already, see [`Slot::reposition`]), and
 /// hands each that assembles to `take` with its coordinates. Each is built in
@@ -170,21 +187,21 @@ pub(super) enum Rates {
 
 impl<T: Real> Twin<T> {
     /// Tries the mode's other coordinate choices at `w`'s state and takes the best
-    /// conditioned if it beats the current one by 1.5 (`failed`: the current choice just
-    /// failed, take any that works). Maps the state exactly and logs it. Returns whether
-    /// it switched.
+    /// conditioned if `why` allows it ([`Leave`]). Maps the state exactly and logs it.
+    /// Returns whether it switched.
     pub(super) fn switch_coordinates(
         &mut self,
         w: &mut Work<T>,
         inputs: &Inputs<T>,
-        failed: Option<StepError>,
+        why: Leave,
     ) -> Result<bool, TwinStepError> {
         let now = self.slots.cur().conditioning();
-        let Some((cond, coords, q)) = self.best_other_choice(w, failed)? else {
-            // No other choice assembles here: the current one still drives.
+        let Some((cond, coords, q)) = self.best_other_choice(w, why)? else {
+            // No other choice assembles here (or none may be taken): the current one
+            // still drives.
             return Ok(false);
         };
-        if !(failed.is_some() || cond > now * T::c(1.5)) {
+        if why == Leave::IfBetter && !(cond > now * T::c(1.5)) {
             return Ok(false);
         }
         self.take_coordinates(w, inputs, (now, cond), coords, &q)?;
@@ -264,6 +281,9 @@ impl<T: Real> Twin<T> {
         let links = self.slots.cur().links(&self.params);
         let from = self.slots.cur().coords;
         self.adopt_scratch(w, inputs, q, &links, Rates::Nearest)?;
+        if self.broke_in == Some(coords) {
+            self.broke_in = None;
+        }
         let after = self.slots.cur().links(&self.params);
         let position_gap = joint_gap(&self.params, &links, &after);
         let speed_gap = (1..9).fold(T::zero(), |e, p| {
@@ -316,12 +336,12 @@ impl<T: Real> Twin<T> {
 
     /// The best conditioned of the mode's other coordinate choices at `w`'s state
     /// (its conditioning, the choice and its coordinates), built in the scratch slot;
-    /// `None` if no other assembles and the current one did not fail (`failed`), an
-    /// error naming every choice's failing group if it did.
+    /// `None` if no other assembles and the current one did not fail
+    /// ([`Leave::Failed`]), an error naming every choice's failing group if it did.
     fn best_other_choice(
         &mut self,
         w: &Work<T>,
-        failed: Option<StepError>,
+        why: Leave,
     ) -> Result<Option<(T, Coordinates, [T; 2])>, TwinStepError> {
         let time = w.t.to_f64();
         let mode = self.slots.cur().mode;
@@ -331,19 +351,21 @@ impl<T: Real> Twin<T> {
         let mut best: Option<(T, Coordinates, [T; 2])> = None;
         // The current choice is not assembled again: it is at this very pose with
         // its conditioning, so it could only win the scan by keeping its place, and
-        // another choice is taken only if it beats it by 1.5. Nor is a choice of
-        // dyads whose conditioning at the pose, known without a build
-        // (`dyads_conditioning`), cannot beat it so (unless the current one failed:
-        // then any that assembles is taken). The margin keeps the prediction's
-        // rounding from deciding. At S2's A68 steps with the crank under
+        // another choice is taken only if it beats it by 1.5 (`Leave::IfBetter`).
+        // Nor, then, is a choice of dyads whose conditioning at the pose, known
+        // without a build (`dyads_conditioning`), cannot beat it so, nor the choice
+        // a step left because its balance broke there. The margin keeps the
+        // prediction's rounding from deciding. At S2's A68 steps with the crank under
         // `switch_below` the lever, near its dead point, was built at every step's end
         // to be dropped: 11k x86_64 instructions a step.
         let current = self.slots.cur().coords;
         let must_beat = self.slots.cur().conditioning() * T::c(1.5 * (1.0 - 1e-9));
+        let broke_in = self.broke_in;
         let skip = |coords: Coordinates| {
             coords == current
-                || (failed.is_none()
-                    && dyads_conditioning(mode, coords, &pose).is_some_and(|c| c < must_beat))
+                || (why == Leave::IfBetter
+                    && (broke_in == Some(coords)
+                        || dyads_conditioning(mode, coords, &pose).is_some_and(|c| c < must_beat)))
         };
         // Before the step changed the current slot the candidate slot is free, the
         // spare; after, it is the scratch and the backup holds the pre-step slot: no
@@ -372,12 +394,13 @@ impl<T: Real> Twin<T> {
                 }
             },
         )?;
-        if best.is_some() || failed.is_none() {
+        let Leave::Failed(failed) = why else {
+            return Ok(best);
+        };
+        if best.is_some() {
             return Ok(best);
         }
-        if let Some(StepError::Group { group, fault, .. }) =
-            failed.map(|e| physical(&self.slots.cur().map, e))
-        {
+        if let StepError::Group { group, fault, .. } = physical(&self.slots.cur().map, failed) {
             let _ = failures.insert(
                 0,
                 Failure {
@@ -404,7 +427,7 @@ mod tests {
     use super::super::slot::LinkState;
     use super::super::slot::Slot;
     use super::super::{Inputs, MotorInput, Twin, TwinSettings};
-    use super::{best_slot, scan_choices, Take};
+    use super::{best_slot, scan_choices, Leave, Take};
     use crate::motor::Motor;
     extern crate std;
     use std::boxed::Box;
@@ -454,7 +477,8 @@ mod tests {
             // A copy of the twin at this step's end, switched to its best other choice.
             let mut copy = twin.clone();
             let mut w = copy.work_from_state();
-            let Some((cond, coords, q)) = copy.best_other_choice(&w, None).unwrap() else {
+            let Some((cond, coords, q)) = copy.best_other_choice(&w, Leave::IfBetter).unwrap()
+            else {
                 continue;
             };
             let before = copy.slots.cur().links(&p);

@@ -110,8 +110,9 @@ pub enum TwinStepError {
         /// by less than the square of their ratio, where DP5's truncation error falls
         /// as its fifth power. Not the step's size, then, but rounding amplified near
         /// a dead point, which finer steps do not mend: f32 at light loads after a
-        /// catch into A68 (20/200 N·m: 4.4 and 2.0 tolerances in 32 and 64
-        /// sub-steps).
+        /// catch into A68 in the levers' coordinates (20/200 N·m: 4.4 and 2.0
+        /// tolerances in 32 and 64 sub-steps). Before it refuses such a step the twin
+        /// redoes it in the mode's other coordinates, if it has any.
         stalled: bool,
     },
     /// A diode branch's rod and lever came in line (stretched, |DH| = rod + lever, or
@@ -438,6 +439,68 @@ impl<T: Real> Twin<T> {
                 }
             }
             e => TwinStepError::Step(e),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::super::mode::{Coordinates, Mode};
+    use super::super::settings::SINGULAR_CONDITIONING;
+    use super::{Failure, TwinStepError};
+    use crate::error::{GroupFault, GroupId};
+    use crate::structomat::GroupKind;
+    extern crate std;
+    use std::string::{String, ToString};
+
+    /// A refused step's message says what broke its balance, by the error's fields: a
+    /// group conditioned under [`SINGULAR_CONDITIONING`] is the mechanism's singularity
+    /// whatever the jumps did; otherwise a jump that did not fall with the sub-steps
+    /// (`stalled`) is rounding, and one that fell too slowly the step's size. The
+    /// worst group is named in the thesis's notation.
+    #[test]
+    fn a_refused_step_says_what_broke_its_balance() {
+        let mut links = [0u8; crate::config::MAX_GROUP_LINKS];
+        links[..2].copy_from_slice(&[5, 7]);
+        let group = GroupId {
+            index: 3,
+            kind: GroupKind::Rrr,
+            links,
+            count: 2,
+        };
+        let message = |conditioning: f64, stalled: bool| -> String {
+            TwinStepError::Diverged {
+                time: 0.241,
+                mode: Mode::A68,
+                jump: -0.165,
+                substeps: 64,
+                worst: Failure {
+                    coords: Coordinates::Lever,
+                    group,
+                    fault: GroupFault::Singular { conditioning },
+                },
+                stalled,
+            }
+            .to_string()
+        };
+        let stalled = message(0.1, true);
+        assert!(
+            stalled.contains("did not fall with the sub-steps"),
+            "{stalled}"
+        );
+        assert!(!stalled.contains("too coarse"), "{stalled}");
+        assert!(
+            stalled.contains("RRR(5,7)") && stalled.contains("64 sub-steps"),
+            "{stalled}"
+        );
+        let coarse = message(0.1, false);
+        assert!(coarse.contains("too coarse"), "{coarse}");
+        for stalled in [false, true] {
+            let singular = message(0.5 * SINGULAR_CONDITIONING, stalled);
+            assert!(
+                singular.contains("a singularity of the mechanism is near"),
+                "{singular}"
+            );
         }
     }
 }

@@ -49,6 +49,7 @@ mod spread;
 pub use audit::Audit;
 pub use capacity::Converter;
 pub use coordinates::CoordinateSwitch;
+use coordinates::Leave;
 pub use correction::Correction;
 pub use error::{Failure, TwinSetupError, TwinStepError};
 pub use guards::{Event, EventKind};
@@ -60,7 +61,7 @@ pub use settings::{
 };
 pub use slot::{LinkState, JOINTS, JOINT_NAMES};
 
-use super::mode::{Clutch, Mode};
+use super::mode::{Clutch, Coordinates, Mode};
 use super::params::CccParams;
 use crate::error::StepError;
 use crate::integrator::Dp5;
@@ -233,9 +234,11 @@ pub struct Twin<T: Real> {
     /// fifth of a speed function for [`hermite_root`](locate::hermite_root).
     last_guards: Option<(Guards<T>, T)>,
     audit: Audit<T>,
-    events: heapless::Vec<Event<T>, MAX_EVENTS_PER_STEP>,
-    switches: heapless::Vec<CoordinateSwitch<T>, { MAX_RETRIES + 1 }>,
-    candidates: heapless::Vec<(Mode, T), 8>,
+    // The logs' lengths in a byte (their capacities are under 256): 4 B of the f32
+    // twin's 32 KiB each.
+    events: heapless::Vec<Event<T>, MAX_EVENTS_PER_STEP, u8>,
+    switches: heapless::Vec<CoordinateSwitch<T>, { MAX_RETRIES + 1 }, u8>,
+    candidates: heapless::Vec<(Mode, T), 8, u8>,
     /// Where `c` came from: a state is committed only with the current slot's own
     /// kinetostatics.
     torque_source: TorqueSource,
@@ -263,6 +266,11 @@ pub struct Twin<T: Real> {
     /// first attempt, set by its commit; a correction of the state between steps
     /// clears it.
     state_evaluated: bool,
+    /// The coordinates a step left because its energy balance broke in them on every
+    /// rung ([`Twin::redo_in_other_coordinates`]): not taken back for a better
+    /// conditioning alone ([`Leave::IfBetter`]) until the mode changes or they are
+    /// conditioned at least `switch_below` again ([`Twin::return_to_preferred`]).
+    broke_in: Option<Coordinates>,
 }
 
 /// The working state of a step, committed only when the whole step succeeds.
@@ -354,8 +362,27 @@ impl<T: Real> Twin<T> {
         let mut excess = None;
         let mut result = self.attempt(inputs, changed, changed, start, &saved, &mut excess);
         let first_jump = excess;
+        let mut progress = (start, excess);
         if matches!(&result, Err(e) if e.retry_finer()) {
-            result = self.climb(inputs, changed, result, (start, excess), &saved);
+            let floor = self.tolerance_at_rounding_floor();
+            result = self.climb(inputs, changed, result, &mut progress, &saved, floor);
+        }
+        // A step that fails near the diode's limit is the mechanism's singularity, also
+        // when rounding (f32) breaks the energy balance some steps before the groups'
+        // conditioning falls under SINGULAR_CONDITIONING. Elsewhere a balance broken on
+        // every rung may pass in other coordinates; no choice drives past the diode.
+        let diode = match &result {
+            Err(e) if e.retry_finer() => self.diode_in_line(),
+            _ => None,
+        };
+        if matches!(&result, Err(TwinStepError::Diverged { .. })) {
+            if diode.is_none() && self.redo_in_other_coordinates(inputs, changed, &saved) {
+                result = Ok(());
+            } else if matches!(&result, Err(TwinStepError::Diverged { stalled: true, .. })) {
+                // The climb stopped where the jump stalled: its finer rungs in these
+                // coordinates, before the step is refused.
+                result = self.climb(inputs, changed, result, &mut progress, &saved, false);
+            }
         }
         let Err(failure) = result else {
             let eventful = !(self.events.is_empty() && self.switches.is_empty());
@@ -376,15 +403,7 @@ impl<T: Real> Twin<T> {
             None => self.switches.clear(),
         }
         self.candidates = candidates;
-        // A step that fails near the diode's limit is the mechanism's singularity, also
-        // when rounding (f32) breaks the energy balance some steps before the groups'
-        // conditioning falls under SINGULAR_CONDITIONING.
-        if failure.retry_finer() {
-            if let Some(e) = self.diode_in_line() {
-                return Err(e);
-            }
-        }
-        Err(failure)
+        Err(diode.unwrap_or(failure))
     }
 
     /// Whether a step under `inputs` can only repeat the last one at rest: that step
@@ -521,6 +540,18 @@ impl<T: Real> Twin<T> {
         if self.settle_pending(w, inputs, changed)? {
             return Ok(());
         }
+        // A step redone because its balance broke in these coordinates
+        // ([`Twin::redo_in_other_coordinates`]) starts in the best other choice, or
+        // not at all if none assembles. The switch counts among the step's
+        // `MAX_RETRIES`.
+        let left = self.broke_in == Some(self.slots.cur().coords);
+        if left && !self.switch_coordinates(w, inputs, Leave::BalanceBroke)? {
+            return Err(TwinStepError::Mechanism {
+                time: w.t.to_f64(),
+                mode: self.slots.cur().mode,
+                failures: heapless::Vec::new(),
+            });
+        }
         let clock = self.step_end()?;
         let t_end = self.spread_step_end(w, clock);
         // Undivided without a conversion of `substeps` (f64's, a library's on the M4F).
@@ -531,7 +562,7 @@ impl<T: Real> Twin<T> {
         if changed && !w.inputs_taken {
             self.new_inputs(w, inputs)?;
         }
-        let mut retries = 0;
+        let mut retries = usize::from(left);
         let mut events = 0;
         while w.t < t_end {
             if self.slots.cur().mode == Mode::Jam {
@@ -569,7 +600,7 @@ impl<T: Real> Twin<T> {
                 // release at 0.2866 s into the crank's Newton group (+160k Thumb-2
                 // instructions on the Cortex-M7) for nothing. A switch made counts
                 // among the step's `MAX_RETRIES`: the step's log holds them all.
-                if self.switch_coordinates(w, inputs, None)? {
+                if self.switch_coordinates(w, inputs, Leave::IfBetter)? {
                     retries += 1;
                 }
             }
@@ -636,7 +667,7 @@ impl<T: Real> Twin<T> {
             return Err(self.physical_error(e));
         }
         self.restart_at(w, inputs)?;
-        self.switch_coordinates(w, inputs, Some(e))?;
+        self.switch_coordinates(w, inputs, Leave::Failed(e))?;
         Ok(false)
     }
 
@@ -747,7 +778,7 @@ impl<T: Real> Twin<T> {
             } else if !self.return_to_preferred(w, inputs)?
                 && self.slots.cur().conditioning() < self.settings.switch_below
             {
-                self.switch_coordinates(w, inputs, None)?;
+                self.switch_coordinates(w, inputs, Leave::IfBetter)?;
             }
         }
         if !same_bits(w.t, t_end) {

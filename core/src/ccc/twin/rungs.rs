@@ -18,6 +18,7 @@ use super::error::TwinStepError;
 use super::inputs::Inputs;
 use super::settings::{RETRY_SUBSTEPS, RUNG_SAFETY, SUBSTEPS};
 use super::Twin;
+use crate::balance;
 use crate::scalar::Real;
 use crate::workspace::WarmStart;
 
@@ -109,22 +110,28 @@ impl JumpHistory {
 }
 
 impl<T: Real> Twin<T> {
-    /// The step redone on the finer rungs after its attempt in `done` sub-steps failed
-    /// (`failed`), its energy jump `excess` (see [`rung_may_pass`]), until one passes
-    /// or fails otherwise: that attempt's result (`failed` if no rung is left). Not
-    /// inlined: the rungs' arithmetic (f64's, a library's on the M4F) stays off the
-    /// path of a step that passes.
+    /// The step redone on the finer rungs after its attempt in `progress.0` sub-steps
+    /// failed (`failed`), its energy jump `progress.1` (see [`rung_may_pass`]), until
+    /// one passes or fails otherwise, or, with `until_stalled`, until two attempts in a
+    /// row show a jump that does not fall with the sub-steps ([`jump_stalled`]: finer
+    /// rungs would not mend it, other coordinates may,
+    /// [`Twin::redo_in_other_coordinates`]): that attempt's result (`failed` if no rung
+    /// is left), `progress` the last attempt's sub-steps and jump. Not inlined: the
+    /// rungs' arithmetic (f64's, a library's on the M4F) stays off the path of a step
+    /// that passes.
     #[inline(never)]
     pub(super) fn climb(
         &mut self,
         inputs: &Inputs<T>,
         changed: bool,
         failed: Result<(), TwinStepError>,
-        (mut done, mut excess): (u32, Option<T>),
+        progress: &mut (u32, Option<T>),
         saved: &WarmStart<T>,
+        until_stalled: bool,
     ) -> Result<(), TwinStepError> {
         let mut result = failed;
-        let mut stalled = false;
+        let mut stalled = matches!(&result, Err(TwinStepError::Diverged { stalled: true, .. }));
+        let (mut done, mut excess) = *progress;
         for substeps in RETRY_SUBSTEPS {
             if substeps <= done || !rung_may_pass(substeps, done, excess) {
                 continue;
@@ -140,14 +147,80 @@ impl<T: Real> Twin<T> {
             stalled = jump_stalled(before, (substeps, excess));
             done = substeps;
             match &result {
-                Err(e) if e.retry_finer() => {}
+                Err(e) if e.retry_finer() && !(until_stalled && stalled) => {}
                 _ => break,
             }
         }
+        *progress = (done, excess);
         if let Err(TwinStepError::Diverged { stalled: s, .. }) = &mut result {
             *s = stalled;
         }
         result
+    }
+
+    /// Whether the energy tolerance is the scalar's rounding floor
+    /// ([`balance::tolerance`]: f32's, at any step under 12 s). There a jump that does
+    /// not fall with the sub-steps is that floor's, and the climb stops at it for other
+    /// coordinates ([`Twin::climb`]'s `until_stalled`): at 22/200 N·m (motor / load) in
+    /// f32 at h = 1 ms the levers' angle breaks the balance by 6.7, 7.5, 4.7, 5.3 and 5.2
+    /// tolerances in 1, 2, 4, 16 and 32 sub-steps: climbed to 64 before the redo in the
+    /// crank's angle the step takes 802 µs on x86_64, stopped at the stall 35 µs (S2's
+    /// worst, 31 µs). In f64 a jump that falls slowly is more often DP5 short of its
+    /// asymptotic rate, which the finer rungs still mend (stopped at it, light loads of
+    /// the f64 grid at 1 ms moved in their last digits).
+    pub(super) fn tolerance_at_rounding_floor(&self) -> bool {
+        !(self.settings.energy_tol > balance::tolerance::<T>())
+    }
+
+    /// A step whose energy balance broke on every rung it tried, redone from its start
+    /// in the mode's best conditioned other choice of coordinates, on the rungs again:
+    /// whether that passed (the twin then goes on in that choice, and does not take the
+    /// one it left back for a better conditioning alone: [`Twin::broke_in`]). `false`
+    /// if the mode has no other choice, none assembles, or the balance breaks there
+    /// too: the step is then refused with the first failure, in the mode's own
+    /// coordinates. Not inlined, as [`Twin::climb`].
+    ///
+    /// Near a dead point of the coordinates the balance breaks on two counts, each a
+    /// property of the choice, not of the step's size:
+    /// - rounding (f32): a coordinate that drives the fastest link many times faster
+    ///   than itself carries the links' speeds with that much of its rounding. At
+    ///   22/200 N·m (motor / load) at h = 1 ms, 1.3 ms after the catch into A68, the
+    ///   lever's angle drives the crank 43 times faster than itself and the links'
+    ///   kinetic energy evaluated from it scatters by 0.2 J (3e-3 of it) from one
+    ///   sub-step to the next, against a tolerance of 0.023 J: the balance broke by 5
+    ///   to 7.5 tolerances in 1 to 64 sub-steps (stalled). The crank's angle,
+    ///   conditioned 0.017 there (the lever 0.063), passes undivided.
+    /// - truncation: the mode's equations in that choice are stiff where its
+    ///   transmission blows up. f64, the drive counter-clockwise with friction at
+    ///   12/100 N·m: at 0.640 s in A68 the step broke the balance by 6.6e-4 J in 16
+    ///   sub-steps in the levers' coordinates, and passes in the crank's.
+    #[inline(never)]
+    pub(super) fn redo_in_other_coordinates(
+        &mut self,
+        inputs: &Inputs<T>,
+        changed: bool,
+        saved: &WarmStart<T>,
+    ) -> bool {
+        let slot = self.slots.cur();
+        if slot.mode.coordinate_choices().len() < 2 {
+            return false;
+        }
+        let bar = self.broke_in;
+        self.broke_in = Some(slot.coords);
+        crate::trace::debug!(
+            "t = {:.6} s: the step redone in the mode's other coordinates (the energy balance broke in {} on every rung)",
+            self.t.to_f64(),
+            slot.coords
+        );
+        let mut excess = None;
+        let mut result = self.attempt(inputs, changed, changed, 1, saved, &mut excess);
+        if matches!(&result, Err(e) if e.retry_finer()) {
+            result = self.climb(inputs, changed, result, &mut (1, excess), saved, false);
+        }
+        if result.is_err() {
+            self.broke_in = bar;
+        }
+        result.is_ok()
     }
 }
 
