@@ -6,7 +6,7 @@ use super::error::{Failure, TwinStepError};
 use super::slot::{LinkState, W_LOAD, W_MOTOR};
 use super::{Twin, Work};
 use crate::error::{GroupFault, StepError};
-use crate::scalar::{perp, rotate_cs, Real, Vec2};
+use crate::scalar::{Real, Vec2};
 
 /// The energy audit (SPEC 3): `motor work + corrections = Δ(kinetic + potential) + load
 /// work + impact losses`, each term in J since the start (`corrections`: the energy an
@@ -70,8 +70,7 @@ fn physical_energy<T: Real>(
     );
     for (p, (s, f)) in links.iter().zip(frames.iter()).enumerate().skip(1) {
         let (m, i, c) = mass_properties(params, p);
-        let r = rotate_cs(f.x, f.y, &c);
-        let v = s.velocity + perp(&r) * s.omega;
+        let (r, v) = s.point_motion(f, &c);
         k += half * (m * v.norm_squared() + i * s.omega * s.omega);
         u -= m * params.gravity.dot(&(s.origin + r));
     }

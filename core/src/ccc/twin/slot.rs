@@ -51,6 +51,16 @@ pub struct LinkState<T: Real> {
     pub velocity: Vec2<T>,
 }
 
+impl<T: Real> LinkState<T> {
+    /// A point `cog` of the link (in its frame, m) seen from the frame's origin in the
+    /// common frame, and its velocity (m/s), the frame's direction `frame` (cos, sin):
+    /// the audit's and the momentum mapping's centre of mass.
+    pub(crate) fn point_motion(&self, frame: &Vec2<T>, cog: &Vec2<T>) -> (Vec2<T>, Vec2<T>) {
+        let r = rotate_cs(frame.x, frame.y, cog);
+        (r, self.velocity + perp(&r) * self.omega)
+    }
+}
+
 /// A mode's model and workspace, sized for the converter ([`Converter`]).
 #[derive(Debug)]
 pub(crate) struct Slot<T: Real> {

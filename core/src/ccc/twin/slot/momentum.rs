@@ -54,8 +54,7 @@ impl<T: Real> Slot<T> {
             };
             let l = physical_link(params, k);
             let f = self.frame(k);
-            let r = rotate_cs(f.x, f.y, &l.cog);
-            let vg = s.velocity + perp(&r) * s.omega;
+            let (r, vg) = s.point_motion(&f, &l.cog);
             // The link's COG from its body's, both from the common frame origin.
             let d = perp(&(r - rotate_cs(body.c, body.s, &model.cog)));
             let rows = |c: usize| {
