@@ -37,7 +37,8 @@ import os, re, subprocess, sys
 
 OPERATING_POINTS = [(1000, 14), (800, 10), (800, 16), (600, 12), (400, 12)]
 SEEDS = [1, 2, 3]
-HELD_OUT_POINTS = [(900, 13), (700, 11), (500, 14)]
+HELD_OUT_POINTS = [(900, 13), (700, 11), (500, 14), (850, 11), (750, 13), (650, 15), (450, 13),
+                   (950, 12), (550, 10), (1100, 15), (700, 14)]
 HELD_OUT_SEED = 7
 
 host_sim, work = sys.argv[1], sys.argv[2]
