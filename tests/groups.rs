@@ -190,12 +190,19 @@ const RRT_TILT: f64 = 0.3;
 
 /// [`m_rrt`] with the given guesses `(θ2, s)`.
 fn m_rrt_with(drive: Option<f64>, guess: [f64; 2]) -> Mech {
+    m_rrt_sized(drive, guess, 0.35)
+}
+
+/// [`m_rrt_with`] with a rod of the given length, m (its centre of mass 0.15 m from the
+/// crank pin, or at its middle if shorter than 0.3 m).
+fn m_rrt_sized(drive: Option<f64>, guess: [f64; 2], rod_len: f64) -> Mech {
     let gamma = deg(20.0);
     let mut b = ModelBuilder::<f64>::new();
     let a = b.ground_point(0.0, 0.0).unwrap();
     let g0 = b.ground_point(0.05, -0.06).unwrap();
     let crank = b.link(Link::bar(0.10, 0.5, 1.0e-3, 0.04)).unwrap();
-    let rod = b.link(Link::bar(0.35, 1.0, 0.012, 0.15)).unwrap();
+    let rod_cog = if rod_len < 0.3 { 0.5 * rod_len } else { 0.15 };
+    let rod = b.link(Link::bar(rod_len, 1.0, 0.012, rod_cog)).unwrap();
     let mut sl = Link::block(0.8, 2.0e-3);
     let pin = sl.add_point(Vec2::new(0.02, 0.03)).unwrap();
     let slider = b.link(sl).unwrap();
@@ -245,7 +252,7 @@ fn m_rrt_with(drive: Option<f64>, guess: [f64; 2]) -> Mech {
             },
             TJ::Rev {
                 a: 2,
-                pa: [0.35, 0.0],
+                pa: [rod_len, 0.0],
                 b: 3,
                 pb: [0.02, 0.03],
             },
@@ -285,15 +292,27 @@ fn m_rtr(drive: Option<f64>) -> Mech {
 
 /// [`m_rtr`] with the given guesses `(θ2, s)`.
 fn m_rtr_with(drive: Option<f64>, guess: [f64; 2]) -> Mech {
+    m_rtr_offset(drive, guess, RTR_LINE)
+}
+
+/// The offset of [`m_rtr`]'s guide line from the rocker's axis, m.
+const RTR_LINE: f64 = 0.015;
+/// [`m_rtr`]'s block pin (the crank pin) in the block's frame, m.
+const RTR_PIN: P2 = [0.01, -0.02];
+/// [`m_rtr`]'s block angle to the rocker, rad.
+const RTR_ANGLE: f64 = 0.1;
+
+/// [`m_rtr_with`] with the guide line `line` m off the rocker's axis.
+fn m_rtr_offset(drive: Option<f64>, guess: [f64; 2], line: f64) -> Mech {
     let mut b = ModelBuilder::<f64>::new();
     let a = b.ground_point(0.0, 0.0).unwrap();
     let c = b.ground_point(0.02, -0.25).unwrap();
     let crank = b.link(Link::bar(0.10, 0.5, 1.0e-3, 0.04)).unwrap();
     let mut rk = Link::bar(0.5, 1.2, 0.03, 0.25);
-    let line = rk.add_point(Vec2::new(0.0, 0.015)).unwrap();
+    let line_point = rk.add_point(Vec2::new(0.0, line)).unwrap();
     let rocker = b.link(rk).unwrap();
     let mut bl = Link::block(0.3, 5.0e-4);
-    let pin = bl.add_point(Vec2::new(0.01, -0.02)).unwrap();
+    let pin = bl.add_point(Vec2::new(RTR_PIN[0], RTR_PIN[1])).unwrap();
     let block = b.link(bl).unwrap();
     b.group(&MotorR {
         link: crank,
@@ -313,10 +332,10 @@ fn m_rtr_with(drive: Option<f64>, guess: [f64; 2]) -> Mech {
         a_at_pole: pin,
         pole_b: c,
         b_at_pole: 0,
-        b_line: line,
+        b_line: line_point,
         b_line_angle: 0.0,
         a_on_line: 0,
-        a_angle: 0.1,
+        a_angle: RTR_ANGLE,
         guess,
     })
     .unwrap();
@@ -337,7 +356,7 @@ fn m_rtr_with(drive: Option<f64>, guess: [f64; 2]) -> Mech {
                 a: 1,
                 pa: [0.10, 0.0],
                 b: 3,
-                pb: [0.01, -0.02],
+                pb: RTR_PIN,
             },
             TJ::Rev {
                 a: 2,
@@ -349,9 +368,9 @@ fn m_rtr_with(drive: Option<f64>, guess: [f64; 2]) -> Mech {
                 s: 3,
                 ps: [0.0, 0.0],
                 g: 2,
-                pg: [0.0, 0.015],
+                pg: [0.0, line],
                 dir: 0.0,
-                rel: 0.1,
+                rel: RTR_ANGLE,
             },
         ],
         formula: "Z(0) + R(1) + RTR(2,3)",
@@ -577,6 +596,12 @@ fn m_trrr(drive: Option<f64>) -> Mech {
 
 /// [`m_trrr`] with the given guesses `(θ2, θ3)`.
 fn m_trrr_with(drive: Option<f64>, guess: [f64; 2]) -> Mech {
+    m_trrr_sized(drive, guess, [0.30, 0.40])
+}
+
+/// [`m_trrr_with`] with links 2 and 3 of the given lengths, m (their centres of mass
+/// at their middles).
+fn m_trrr_sized(drive: Option<f64>, guess: [f64; 2], [len2, len3]: [f64; 2]) -> Mech {
     let th = deg(30.0);
     let mut b = ModelBuilder::<f64>::new();
     let g0 = b.ground_point(0.0, 0.0).unwrap();
@@ -584,8 +609,8 @@ fn m_trrr_with(drive: Option<f64>, guess: [f64; 2]) -> Mech {
     let mut sl = Link::block(0.3, 1.0e-3);
     let pin = sl.add_point(Vec2::new(0.0, 0.02)).unwrap();
     let slider = b.link(sl).unwrap();
-    let l2 = b.link(Link::bar(0.30, 0.8, 0.006, 0.15)).unwrap();
-    let l3 = b.link(Link::bar(0.40, 0.7, 0.0093, 0.2)).unwrap();
+    let l2 = b.link(Link::bar(len2, 0.8, 0.006, 0.5 * len2)).unwrap();
+    let l3 = b.link(Link::bar(len3, 0.7, 0.0093, 0.5 * len3)).unwrap();
     b.group(&MotorT {
         link: slider,
         guide: g0,
@@ -639,9 +664,9 @@ fn m_trrr_with(drive: Option<f64>, guess: [f64; 2]) -> Mech {
             },
             TJ::Rev {
                 a: 2,
-                pa: [0.30, 0.0],
+                pa: [len2, 0.0],
                 b: 3,
-                pb: [0.40, 0.0],
+                pb: [len3, 0.0],
             },
         ],
         formula: "Z(0) + T(1) + RRR(2,3)",
@@ -1870,167 +1895,52 @@ fn setup_fault(
 #[test]
 fn rrr_too_short_cannot_assemble() {
     let th = deg(30.0);
-    let mut b = ModelBuilder::<f64>::new();
-    let g0 = b.ground_point(0.0, 0.0).unwrap();
-    let d = b.ground_point(-0.4, -0.6).unwrap();
-    let mut sl = Link::block(0.3, 1.0e-3);
-    let pin = sl.add_point(Vec2::new(0.0, 0.02)).unwrap();
-    let slider = b.link(sl).unwrap();
-    let l2 = b.link(Link::bar(0.05, 0.8, 0.006, 0.025)).unwrap();
-    let l3 = b.link(Link::bar(0.05, 0.7, 0.0093, 0.025)).unwrap();
-    b.group(&MotorT {
-        link: slider,
-        guide: g0,
-        guide_angle: th,
-        link_point: 0,
-        link_angle: th,
-        coord: 0,
-    })
-    .unwrap();
-    b.group(&DyadRrr {
-        a: l2,
-        b: l3,
-        pole_a: PointRef {
-            body: slider,
-            point: pin,
-        },
-        a_at_pole: 0,
-        pole_b: d,
-        b_at_pole: 0,
-        a_joint: 1,
-        b_joint: 1,
-        guess: [-0.4, 0.78],
-    })
-    .unwrap();
+    let m = m_trrr_sized(None, [-0.4, 0.78], [0.05, 0.05]);
     let q0 = -0.44;
     let p = add(rot(th, [q0, 0.02]), [0.0, 0.0]);
     let gap = norm(sub(p, [-0.4, -0.6])) - 0.1;
-    let fault = setup_fault(
-        b.build().unwrap(),
-        &[q0],
-        1,
-        GroupKind::Rrr,
-        &[2, 3],
-        "RRR(2,3)",
-    );
+    let fault = setup_fault(m.model, &[q0], 1, GroupKind::Rrr, &[2, 3], "RRR(2,3)");
     let GroupFault::CannotAssemble { gap: g } = fault else {
         panic!("RRR: fault {fault:?}")
     };
     assert_close(g, gap, 1e-12, 1e-15, "RRR: gap");
 }
 
-/// RRT: a 0.02 m rod cannot reach the line of the slider's pin, 0.143 m from the crank
+/// RRT: a 0.02 m rod cannot reach the line of the slider's pin, 0.138 m from the crank
 /// pin at q = 1.8 rad.
 #[test]
 fn rrt_too_short_cannot_assemble() {
     let gamma = deg(20.0);
-    let mut b = ModelBuilder::<f64>::new();
-    let a = b.ground_point(0.0, 0.0).unwrap();
-    let g0 = b.ground_point(0.05, -0.06).unwrap();
-    let crank = b.link(Link::bar(0.10, 0.5, 1.0e-3, 0.04)).unwrap();
-    let rod = b.link(Link::bar(0.02, 1.0, 0.012, 0.01)).unwrap();
-    let mut sl = Link::block(0.8, 2.0e-3);
-    let pin = sl.add_point(Vec2::new(0.02, 0.03)).unwrap();
-    let slider = b.link(sl).unwrap();
-    b.group(&MotorR {
-        link: crank,
-        pivot: a,
-        link_point: 0,
-        coord: 0,
-        offset: 0.0,
-    })
-    .unwrap();
-    b.group(&DyadRrt {
-        rod,
-        slider,
-        pole: PointRef {
-            body: crank,
-            point: 1,
-        },
-        rod_at_pole: 0,
-        rod_joint: 1,
-        slider_joint: pin,
-        guide: g0,
-        guide_angle: gamma,
-        slider_on_guide: 0,
-        slider_angle: gamma,
-        guess: [0.35, 0.3],
-    })
-    .unwrap();
+    let m = m_rrt_sized(None, [0.35, 0.3], 0.02);
     let q0 = 1.8;
     // Distance from the crank pin to the line of the slider's pin, minus the rod.
-    let k = add([0.05, -0.06], rot(gamma, [0.02, 0.03]));
+    let k = add([0.05, -0.06], rot(gamma + RRT_TILT, [0.02, 0.03]));
     let bq = rot(q0, [0.10, 0.0]);
     let gap = cross(unit(gamma), sub(bq, k)).abs() - 0.02;
     assert!(gap > 0.05);
-    let fault = setup_fault(
-        b.build().unwrap(),
-        &[q0],
-        1,
-        GroupKind::Rrt,
-        &[2, 3],
-        "RRT(2,3)",
-    );
+    let fault = setup_fault(m.model, &[q0], 1, GroupKind::Rrt, &[2, 3], "RRT(2,3)");
     let GroupFault::CannotAssemble { gap: g } = fault else {
         panic!("RRT: fault {fault:?}")
     };
     assert_close(g, gap, 1e-12, 1e-15, "RRT: gap");
 }
 
-/// RTR: the block's pin sits 0.4 m off the rocker's guide line, more than the 0.17 m
-/// between the crank pin and the rocker's pivot at q = -60°.
+/// RTR: the guide line 0.4 m off the rocker's axis puts the block's pin 0.381 m off it,
+/// more than the 0.17 m between the crank pin and the rocker's pivot at q = -60°.
 #[test]
 fn rtr_offset_too_large_cannot_assemble() {
-    let mut b = ModelBuilder::<f64>::new();
-    let a = b.ground_point(0.0, 0.0).unwrap();
-    let c = b.ground_point(0.02, -0.25).unwrap();
-    let crank = b.link(Link::bar(0.10, 0.5, 1.0e-3, 0.04)).unwrap();
-    let mut rk = Link::bar(0.5, 1.2, 0.03, 0.25);
-    let line = rk.add_point(Vec2::new(0.0, 0.4)).unwrap();
-    let rocker = b.link(rk).unwrap();
-    let mut bl = Link::block(0.3, 5.0e-4);
-    let pin = bl.add_point(Vec2::new(0.0, 0.0)).unwrap();
-    let block = b.link(bl).unwrap();
-    b.group(&MotorR {
-        link: crank,
-        pivot: a,
-        link_point: 0,
-        coord: 0,
-        offset: 0.0,
-    })
-    .unwrap();
-    b.group(&DyadRtr {
-        a: block,
-        b: rocker,
-        pole_a: PointRef {
-            body: crank,
-            point: 1,
-        },
-        a_at_pole: pin,
-        pole_b: c,
-        b_at_pole: 0,
-        b_line: line,
-        b_line_angle: 0.0,
-        a_on_line: 0,
-        a_angle: 0.0,
-        guess: [1.6, 0.35],
-    })
-    .unwrap();
+    let m = m_rtr_offset(None, [1.6, 0.35], 0.4);
     let q0 = deg(-60.0);
     let dist = norm(sub(rot(q0, [0.10, 0.0]), [0.02, -0.25]));
-    assert!(dist < 0.4);
-    let fault = setup_fault(
-        b.build().unwrap(),
-        &[q0],
-        1,
-        GroupKind::Rtr,
-        &[2, 3],
-        "RTR(2,3)",
-    );
+    // The pin's distance from the rocker's axis: the line's offset and the pin's own,
+    // the block turned by RTR_ANGLE on the line.
+    let off = 0.4 + rot(RTR_ANGLE, RTR_PIN)[1];
+    assert!(dist < off);
+    let fault = setup_fault(m.model, &[q0], 1, GroupKind::Rtr, &[2, 3], "RTR(2,3)");
     let GroupFault::CannotAssemble { gap: g } = fault else {
         panic!("RTR: fault {fault:?}")
     };
-    assert_close(g, 0.4 - dist, 1e-12, 1e-15, "RTR: gap");
+    assert_close(g, off - dist, 1e-12, 1e-15, "RTR: gap");
 }
 
 /// TRT with the slot parallel to the fixed guide (q = 0): a dead point at assembly.
