@@ -194,15 +194,14 @@ fn m_rrt_with(drive: Option<f64>, guess: [f64; 2]) -> Mech {
 }
 
 /// [`m_rrt_with`] with a rod of the given length, m (its centre of mass 0.15 m from the
-/// crank pin, or at its middle if shorter than 0.3 m).
+/// crank pin).
 fn m_rrt_sized(drive: Option<f64>, guess: [f64; 2], rod_len: f64) -> Mech {
     let gamma = deg(20.0);
     let mut b = ModelBuilder::<f64>::new();
     let a = b.ground_point(0.0, 0.0).unwrap();
     let g0 = b.ground_point(0.05, -0.06).unwrap();
     let crank = b.link(Link::bar(0.10, 0.5, 1.0e-3, 0.04)).unwrap();
-    let rod_cog = if rod_len < 0.3 { 0.5 * rod_len } else { 0.15 };
-    let rod = b.link(Link::bar(rod_len, 1.0, 0.012, rod_cog)).unwrap();
+    let rod = b.link(Link::bar(rod_len, 1.0, 0.012, 0.15)).unwrap();
     let mut sl = Link::block(0.8, 2.0e-3);
     let pin = sl.add_point(Vec2::new(0.02, 0.03)).unwrap();
     let slider = b.link(sl).unwrap();

@@ -26,7 +26,7 @@ I0, comes before the shaft turns, so the load does not move it).
 
     python3 first_release.py HOST_SIM
 """
-import csv, math, os, re, subprocess, sys, tempfile
+import math, os, re, sys
 
 POINTS = [(800, 10), (700, 11), (800, 12), (900, 13), (1000, 14)]
 COUNT = 2 * math.pi / 4096
@@ -34,6 +34,9 @@ LAG_AT = 0.015
 
 host_sim = sys.argv[1]
 root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+sys.dont_write_bytecode = True  # no __pycache__ beside the test data
+sys.path.insert(0, os.path.join(root, "host-sim", "tests", "data"))
+from make_known_logs import run_converter  # noqa: E402 (the logs' own runner)
 spec = open(os.path.join(root, "host-sim", "scenarios", "ccc-s2.toml")).read()
 machine = open(os.path.join(root, "host-sim", "tests", "data", "bench1-identified.toml")).read()
 machine_mass = float(re.search(r"^mass = ([0-9.e+-]+)$", machine, re.M).group(1))
@@ -54,12 +57,7 @@ def run(text, load, motor):
     text = re.sub(r"^t_end = [0-9.]+", "t_end = 0.06", text, flags=re.M)
     if "t_end" not in text:
         text = text.replace("[run]", "[run]\nt_end = 0.06")
-    with tempfile.TemporaryDirectory() as d:
-        params, out = os.path.join(d, "m.toml"), os.path.join(d, "m.csv")
-        open(params, "w").write(text)
-        subprocess.run([host_sim, "run", params, "--out", out, "--quiet"], check=True)
-        rows = list(csv.DictReader(open(out)))
-        events = list(csv.DictReader(open(os.path.join(d, "m.events.csv"))))
+    rows, events = run_converter(host_sim, text)
     release = next(float(e["time"]) for e in events if e["event"].startswith("release"))
     return release, [(float(r["t"]), float(r["theta1"])) for r in rows]
 
