@@ -339,7 +339,7 @@ pub fn run_all<T: Real, C: Counter, W: Write>(
         counts,
     } = places;
     for run in runs {
-        run_s2(twin_slot, counts, counter, out, run, perturbed)?;
+        run_s2(twin_slot, counts, counter, out, run, perturbed, false)?;
     }
     if !perturbed {
         for tuning in [bench::Tuning::Nominal, bench::Tuning::Identified] {
@@ -352,7 +352,10 @@ pub fn run_all<T: Real, C: Counter, W: Write>(
 
 /// S2 for `run.steps` steps at `run.h` (its load raised by 2 ulps if `perturbed`): the
 /// records of `run`. Its stack records are what construction and the steps use below
-/// this function's frame (painted here before each).
+/// this function's frame (painted here before each). With `every`, a `cost` record of
+/// each step as well (`checks/firmware/profile/run BOARD RUN costs`): its instructions
+/// and the mode and coordinates it started in, `event` if it had an event, a coordinate
+/// switch or a mode change.
 #[inline(never)]
 pub fn run_s2<T: Real, C: Counter, W: Write>(
     twin_slot: &mut MaybeUninit<Twin<T>>,
@@ -361,6 +364,7 @@ pub fn run_s2<T: Real, C: Counter, W: Write>(
     out: &mut W,
     run: &S2Run,
     perturbed: bool,
+    every: bool,
 ) -> Result<(), Failed> {
     let name = run.name;
     let mut inputs = s2_inputs::<T>();
@@ -401,6 +405,15 @@ pub fn run_s2<T: Real, C: Counter, W: Write>(
         hash_twin(&mut d, twin);
         let event =
             !twin.events().is_empty() || !twin.switches().is_empty() || before.0 != twin.mode();
+        if every {
+            record!(
+                out,
+                "{name} cost {k} {c} {}/{}{}",
+                before.0.name(),
+                before.1.name(),
+                if event { " event" } else { "" }
+            );
+        }
         if event {
             last_event.clear();
             if event_line(&mut last_event, k, before, twin).is_err() {

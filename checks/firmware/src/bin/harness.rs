@@ -15,7 +15,8 @@
 //! instruction: the HardFault handler must exit with failure), `panic`, `hang` (only the
 //! timeout ends it), `perturb` (the first S2 run with its load 2 ulps higher: its digest
 //! must differ from the host's), or `profile<K>`: S2's run K alone (its records only),
-//! for `checks/firmware/profile/run`.
+//! for `checks/firmware/profile/run`, or `costs<K>`: the same with every step's
+//! instructions, mode and coordinates (`profile/run BOARD K costs`).
 #![no_std]
 #![no_main]
 
@@ -55,11 +56,17 @@ fn main() -> ! {
     let word = target::command_word(&mut line);
     // `profile<K>`: S2's run K of `RUNS` alone, for an instruction profile of it
     // (`checks/firmware/profile/run`); no comparison, the run's records only.
-    if let [b'p', b'r', b'o', b'f', b'i', b'l', b'e', k] = *word {
+    // `costs<K>`: the same with a record of every step's instructions.
+    let alone = match *word {
+        [b'p', b'r', b'o', b'f', b'i', b'l', b'e', k] => Some((k, false)),
+        [b'c', b'o', b's', b't', b's', k] => Some((k, true)),
+        _ => None,
+    };
+    if let Some((k, every)) = alone {
         let Some(run) = RUNS.get(usize::from(k.wrapping_sub(b'0'))) else {
             exit(false)
         };
-        let ok = run_s2(TWIN, COUNTS, &mut systick, &mut out, run, false).is_ok();
+        let ok = run_s2(TWIN, COUNTS, &mut systick, &mut out, run, false, every).is_ok();
         exit(ok)
     }
     let perturbed = match word {
