@@ -71,7 +71,10 @@ def replay(log, clutch, params, tuning, out):
     same = mismatch is None and pairs.group(1) == pairs.group(2)
     events = int(pairs.group(1))
     within = sum(abs(d) <= 1.0 for d in dts)
+    # The observer's first `twin-parted` (the twin left the machine), s.
+    parted = re.search(r"onsets:.*?twin-parted ([0-9.]+)", text)
     return {
+        "parted": parted.group(1) if parted else "",
         "same": same,
         "mismatch": mismatch.group(2) if mismatch else "",
         "events": events,
@@ -110,11 +113,12 @@ for truth, machine, other, load, motor, seed in runs:
         rows.append((truth, load, motor, seed, name, r))
 
 print(f"{'truth':8} {'T_r':>5} {'motor':>5} {'seed':>4} {'replay':16} {'sequence':>22} "
-      f"{'RMS':>8} {'in 1 ms':>8} targets")
+      f"{'RMS':>8} {'in 1 ms':>8} targets  twin-parted")
 for truth, load, motor, seed, name, r in rows:
     seq = "same" if r["same"] else f"parts at {r['mismatch']} s"
+    parted = f"from {r['parted']} s" if r["parted"] else "-"
     print(f"{truth:8} {load:>5} {motor:>5} {seed:>4} {name:16} {seq:>22} {r['rms']:>8.2f} "
-          f"{r['within']:>3}/{r['events']:<4} {'met' if r['met'] else '-'}")
+          f"{r['within']:>3}/{r['events']:<4} {'met' if r['met'] else '-':7}  {parted}")
 for truth in ("known", "held-out"):
     for name in replays(known, held_out):
         mine = [r for t, *_, n, r in rows if t == truth and n == name]
@@ -123,3 +127,8 @@ for truth in ("known", "held-out"):
         met = sum(r["met"] for r in mine)
         print(f"{truth} {name}: the machine's sequence kept in {kept} of {len(mine)} logs; "
               f"kept with crank RMS <= 1 count in {good}; issue 19's targets met in {met}")
+observed = [r for *_, n, r in rows if n in ("identified", "exact-nom", "nominal", "identified-other")]
+apart = [r for r in observed if not r["same"]]
+print(f"twin-parted (observed replays): raised in {sum(bool(r['parted']) for r in apart)} of the "
+      f"{len(apart)} whose sequence parts, in {sum(bool(r['parted']) for r in observed if r['same'])} "
+      f"of the {len(observed) - len(apart)} that keep it")

@@ -241,8 +241,9 @@ The clutch log (CSV: t, event, from, to; the events and modes in host-sim's name
                 standard deviation of the angle's error after the update, counts
   shaft_innovation   the shaft's motion since the last mode change, measured - twin,
                 counts
-  crank_jump shaft_jump clutch_slip failed_catch load_bias   1 at a step that raised
-                the diagnostic
+  crank_jump shaft_jump clutch_slip failed_catch load_bias twin_parted
+                1 at a step that raised the diagnostic (twin_parted: the crank's
+                residual past 16 counts for 10 steps in a row, at each step it lasts)
   and the summary the innovations' and residuals' RMS and largest (over the run and
   after its first 20 ms), the corrections' energy and each diagnostic's onsets.
   host-sim plot of that CSV draws encoders (measured and twin) and observer (the

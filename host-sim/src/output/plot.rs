@@ -336,12 +336,13 @@ fn converter_plots(table: &Table, name: &str) -> Vec<(String, Figure)> {
 }
 
 /// The diagnostics' columns of an observed replay and their legends.
-const DIAGNOSTICS: [(&str, &str); 5] = [
+const DIAGNOSTICS: [(&str, &str); 6] = [
     ("crank_jump", "crank encoder jump"),
     ("shaft_jump", "shaft encoder jump"),
     ("clutch_slip", "clutch slip"),
     ("failed_catch", "failed catch"),
     ("load_bias", "load bias"),
+    ("twin_parted", "twin parted"),
 ];
 
 /// An observed replay's panels (`None` without its columns): the crank's innovation

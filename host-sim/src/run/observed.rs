@@ -17,7 +17,7 @@ use structomat::Real;
 /// viscous friction estimated (N·m·s/rad, its torque `-c ω1` added to the motor's), the
 /// oscillating mass the twin carries (kg: the estimate, with a tuning that estimates
 /// it), and each diagnostic (1 when raised at the step).
-pub const OBSERVER_COLUMNS: [&str; 11] = [
+pub const OBSERVER_COLUMNS: [&str; 12] = [
     "crank_innovation",
     "crank_sigma",
     "shaft_innovation",
@@ -29,6 +29,7 @@ pub const OBSERVER_COLUMNS: [&str; 11] = [
     "clutch_slip",
     "failed_catch",
     "load_bias",
+    "twin_parted",
 ];
 
 /// The statistics are taken after this time, s: the observer's settling from a wrong
@@ -106,13 +107,13 @@ pub struct ObservedSummary {
     /// and name.
     pub onsets: Vec<(f64, &'static str)>,
     /// Steps each diagnostic was raised at, in [`Diagnostic::ALL`]'s order.
-    pub steps: [u64; 5],
+    pub steps: [u64; Diagnostic::ALL.len()],
     /// The energy the corrections put in, J (the audit's own term).
     pub correction_energy: f64,
     /// The crank's unknown torque (N·m), its bearing's unknown viscous friction
     /// (N·m·s/rad) and the oscillating mass (kg) estimated at the last step.
     pub estimates: (f64, f64, f64),
-    last: [bool; 5],
+    last: [bool; Diagnostic::ALL.len()],
 }
 
 impl ObservedSummary {

@@ -19,6 +19,13 @@ pub enum Diagnostic {
     /// The unknown torque's estimate, averaged while the shaft turns, departs from its
     /// average while the shaft is held: the load differs from its set point.
     LoadBias,
+    /// The crank's residual (measured - twin, after the update) has stayed past
+    /// [`ObserverSettings::part_counts`](super::ObserverSettings::part_counts) for
+    /// [`ObserverSettings::part_steps`](super::ObserverSettings::part_steps) steps in
+    /// a row: the corrections do not bring the twin back to the machine (its mode
+    /// sequence or its model has parted from the machine's), and its outputs are not
+    /// the machine's. Raised at every step while it lasts.
+    Parted,
 }
 
 impl Diagnostic {
@@ -30,6 +37,7 @@ impl Diagnostic {
             Diagnostic::ClutchSlip => "clutch-slip",
             Diagnostic::FailedCatch => "failed-catch",
             Diagnostic::LoadBias => "load-bias",
+            Diagnostic::Parted => "twin-parted",
         }
     }
 
@@ -41,16 +49,18 @@ impl Diagnostic {
             Diagnostic::ClutchSlip => 1 << 2,
             Diagnostic::FailedCatch => 1 << 3,
             Diagnostic::LoadBias => 1 << 4,
+            Diagnostic::Parted => 1 << 5,
         }
     }
 
     /// Every diagnostic, in a fixed order.
-    pub const ALL: [Diagnostic; 5] = [
+    pub const ALL: [Diagnostic; 6] = [
         Diagnostic::EncoderJump("crank"),
         Diagnostic::EncoderJump("shaft"),
         Diagnostic::ClutchSlip,
         Diagnostic::FailedCatch,
         Diagnostic::LoadBias,
+        Diagnostic::Parted,
     ];
 }
 

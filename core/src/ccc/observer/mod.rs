@@ -112,7 +112,12 @@
 //! reading used, no diagnostic); the shaft's motion measured since the last mode change,
 //! against the twin's, names a clutch that slips or fails to catch; the corrections'
 //! mean acceleration while the shaft turns against while it is held names a load off
-//! its set point.
+//! its set point; a crank residual that stays large after the updates
+//! ([`ObserverSettings::part_counts`] for [`ObserverSettings::part_steps`] steps) names
+//! a twin parted from the machine: where a correction must stop short of an event
+//! function's crossing (the twin's next step is to take the event) but the twin's own
+//! dynamics run the other way, no update brings it back, and the twin's outputs are no
+//! longer the machine's.
 //!
 //! Bounded work, no allocation, no panic: a twin step, a few 5×5 products, at most
 //! one [`Twin::correct_crank`] (one evaluation of the mode, and a mode choice only
@@ -182,6 +187,13 @@ pub struct ObserverSettings<T> {
     /// The shaft's motion off the mode's (counts, since the last mode change) that is a
     /// clutch diagnostic.
     pub slip_counts: T,
+    /// The crank's residual after the update (counts, either sense) past which, held
+    /// for [`part_steps`](Self::part_steps) steps in a row, the twin has parted from
+    /// the machine ([`Diagnostic::Parted`]).
+    pub part_counts: T,
+    /// The steps in a row the residual stays past [`part_counts`](Self::part_counts)
+    /// before [`Diagnostic::Parted`] is raised.
+    pub part_steps: u32,
     /// Time constant of the load-bias averages of the unknown torque's estimate, s.
     pub bias_time: T,
     /// The least `|∂θ1/∂q|` at which the crank's angle corrects the state: near the
@@ -258,6 +270,8 @@ impl<T: Real> ObserverSettings<T> {
             jump_counts: T::c(16.0),
             jump_run: 5,
             slip_counts: T::c(4.0),
+            part_counts: T::c(16.0),
+            part_steps: 10,
             bias_time: T::c(0.1),
             min_transmission: T::c(0.4),
             // Off: on a nominal twin the estimate's turning and held averages differ
@@ -309,6 +323,8 @@ impl<T: Real> ObserverSettings<T> {
             jump_counts: T::c(16.0),
             jump_run: 5,
             slip_counts: T::c(4.0),
+            part_counts: T::c(16.0),
+            part_steps: 10,
             bias_time: T::c(0.1),
             min_transmission: T::c(0.3),
             // bench1 on its identified twin: the averages differ by at most 0.23 N·m
@@ -363,6 +379,8 @@ pub struct TwinObserver<T: Real> {
     /// from and is held around.
     nominal_mass: Option<T>,
     jumps: u32,
+    /// Steps in a row the crank's residual has been past `part_counts`.
+    parted: u32,
     /// The crank's residual (measured - twin) after the last update, rad.
     residual: Option<T>,
     /// The shaft's count and the twin's shaft angle (drive direction, rad) at the last
@@ -456,6 +474,7 @@ impl<T: Real> TwinObserver<T> {
             mass_offset: T::zero(),
             nominal_mass: None,
             jumps: 0,
+            parted: 0,
             residual: None,
             shaft_ref: None,
             bias: BiasWatch::new(),
@@ -684,7 +703,16 @@ impl<T: Real> TwinObserver<T> {
             if !jump {
                 self.jumps = 0;
             }
-            self.residual = Some(e.angle() - twin.link(1).theta);
+            let residual = e.angle() - twin.link(1).theta;
+            self.residual = Some(residual);
+            self.parted = if residual.abs() > s.part_counts * res {
+                self.parted.saturating_add(1)
+            } else {
+                0
+            };
+            if self.parted >= s.part_steps {
+                up.diagnostics.insert(Diagnostic::Parted);
+            }
             self.bias
                 .add(self.torque, h, twin.mode().shaft_turning(), s.bias_time);
             if self
