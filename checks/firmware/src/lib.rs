@@ -353,7 +353,7 @@ pub fn run_all<T: Real, C: Counter, W: Write>(
 /// S2 for `run.steps` steps at `run.h` (its load raised by 2 ulps if `perturbed`): the
 /// records of `run`. Its stack records are what construction and the steps use below
 /// this function's frame (painted here before each). With `every`, a `cost` record of
-/// each step as well (`checks/firmware/profile/run BOARD RUN costs`): its instructions
+/// each step as well (`checks/firmware/profile/run BOARD RUN 0 costs`): its instructions
 /// and the mode and coordinates it started in, `event` if it had an event, a coordinate
 /// switch or a mode change.
 #[inline(never)]

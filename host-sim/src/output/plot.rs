@@ -344,6 +344,7 @@ const DIAGNOSTICS: [(&str, &str); 6] = [
     ("load_bias", "load bias"),
     ("twin_parted", "twin parted"),
 ];
+const _: () = assert!(DIAGNOSTICS.len() == structomat::ccc::Diagnostic::ALL.len());
 
 /// An observed replay's panels (`None` without its columns): the crank's innovation
 /// (measured - predicted) beside its residual after the update (measured - corrected

@@ -32,6 +32,12 @@ pub const OBSERVER_COLUMNS: [&str; 12] = [
     "twin_parted",
 ];
 
+/// The columns before the diagnostics': one for each diagnostic follows, in
+/// [`Diagnostic::ALL`]'s order (a diagnostic added to the core without its column fails
+/// to compile here).
+const ESTIMATE_COLUMNS: usize = 6;
+const _: () = assert!(OBSERVER_COLUMNS.len() == ESTIMATE_COLUMNS + Diagnostic::ALL.len());
+
 /// The statistics are taken after this time, s: the observer's settling from a wrong
 /// initial state (issue 19: "after the first 20 ms").
 pub const SETTLE: f64 = 0.02;

@@ -16,7 +16,7 @@
 //! timeout ends it), `perturb` (the first S2 run with its load 2 ulps higher: its digest
 //! must differ from the host's), or `profile<K>`: S2's run K alone (its records only),
 //! for `checks/firmware/profile/run`, or `costs<K>`: the same with every step's
-//! instructions, mode and coordinates (`profile/run BOARD K costs`).
+//! instructions, mode and coordinates (`profile/run BOARD K 0 costs`).
 #![no_std]
 #![no_main]
 

@@ -114,10 +114,9 @@
 //! mean acceleration while the shaft turns against while it is held names a load off
 //! its set point; a crank residual that stays large after the updates
 //! ([`ObserverSettings::part_counts`] for [`ObserverSettings::part_steps`] steps) names
-//! a twin parted from the machine: where a correction must stop short of an event
-//! function's crossing (the twin's next step is to take the event) but the twin's own
-//! dynamics run the other way, no update brings it back, and the twin's outputs are no
-//! longer the machine's.
+//! a twin parted from the machine, whose outputs are no longer the machine's (as where
+//! each correction must stop short of an event function's crossing, for the twin's
+//! next step to take the event, but the twin's own dynamics run the other way).
 //!
 //! Bounded work, no allocation, no panic: a twin step, a few 5×5 products, at most
 //! one [`Twin::correct_crank`] (one evaluation of the mode, and a mode choice only
