@@ -55,7 +55,13 @@ impl Machine {
 
     /// One period; the encoders' `(crank, shaft)` counts at its end.
     fn period(&mut self) -> (i64, i64) {
-        self.twin.step(&s2_inputs(None)).expect("the machine steps");
+        self.period_under(&s2_inputs(None))
+    }
+
+    /// One period under the machine's own `inputs` (another motor or brake than the
+    /// twin is told); the encoders' counts at its end.
+    fn period_under(&mut self, inputs: &Inputs<f64>) -> (i64, i64) {
+        self.twin.step(inputs).expect("the machine steps");
         (
             counts(self.twin.link(1).theta),
             counts(self.twin.shaft_drive_angle()),
@@ -412,18 +418,11 @@ fn the_torque_estimate_finds_a_known_extra_torque_on_the_crank() {
         let mut obs = TwinObserver::new(settings);
         let mut estimates = Vec::new();
         for _ in 0..1000 {
-            machine
-                .twin
-                .step(&Inputs {
-                    motor: law(asynchronous, 12.0 + extra),
-                    load: 800.0,
-                    measured: None,
-                })
-                .expect("the machine steps");
-            let c = (
-                counts(machine.twin.link(1).theta),
-                counts(machine.twin.shaft_drive_angle()),
-            );
+            let c = machine.period_under(&Inputs {
+                motor: law(asynchronous, 12.0 + extra),
+                load: 800.0,
+                measured: None,
+            });
             let inputs = Inputs {
                 motor: law(asynchronous, 12.0),
                 ..s2_inputs(Some(reading(c)))
@@ -688,18 +687,11 @@ fn a_twin_the_machine_leaves_is_named_parted() {
         let res = TAU / f64::from(N);
         let (mut over_low, mut over_high, mut first) = (0, 0, None);
         for k in 0..1000 {
-            machine
-                .twin
-                .step(&Inputs {
-                    motor: MotorInput::Law(Motor::Constant(12.0 + extra)),
-                    load,
-                    measured: None,
-                })
-                .expect("the machine steps");
-            let c = (
-                counts(machine.twin.link(1).theta),
-                counts(machine.twin.shaft_drive_angle()),
-            );
+            let c = machine.period_under(&Inputs {
+                motor: MotorInput::Law(Motor::Constant(12.0 + extra)),
+                load,
+                measured: None,
+            });
             let up = obs
                 .step(&mut t, &s2_inputs(Some(reading(c))))
                 .expect("the twin steps");
