@@ -9,10 +9,10 @@ use host_sim::ccc::{CccSummary, End};
 use host_sim::run::{interrupt, simulate, Report};
 use host_sim::{RunError, RunOptions, ScenarioId, Summary};
 use numpy::PyArray1;
+use pyo3::exceptions::PyRuntimeError;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList, PyString, PyTuple};
 use std::cell::RefCell;
-use std::collections::HashMap;
 use std::rc::Rc;
 use std::time::{Duration, Instant};
 
@@ -125,21 +125,27 @@ pub fn scenarios() -> Vec<(&'static str, &'static str)> {
 
 /// A table as a dict of column name to a float64 array (a list of str for names),
 /// its number columns moved into numpy without a copy, each distinct name made a
-/// Python str once (a mode's name repeats on every row).
+/// Python str once and shared by its rows.
 pub fn table_dict<'py>(py: Python<'py>, t: Table) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
     let mut columns = t.columns.into_iter();
     for name in &t.names {
         match columns.next() {
             Some(Column::Num(v)) => d.set_item(name, PyArray1::from_vec(py, v))?,
-            Some(Column::Text(v)) => {
-                let mut made: HashMap<String, Bound<'py, PyString>> = HashMap::new();
-                let list = PyList::empty(py);
-                for s in v {
-                    let p = made.entry(s).or_insert_with_key(|s| PyString::new(py, s));
-                    list.append(&*p)?;
-                }
-                d.set_item(name, list)?
+            Some(Column::Text(c)) => {
+                let made: Vec<Bound<'py, PyString>> =
+                    c.names.iter().map(|s| PyString::new(py, s)).collect();
+                let rows = c
+                    .codes
+                    .iter()
+                    .map(|&k| made.get(k as usize).cloned())
+                    .collect::<Option<Vec<_>>>()
+                    .ok_or_else(|| {
+                        PyRuntimeError::new_err(format!(
+                            "column {name}: a name's code past its names"
+                        ))
+                    })?;
+                d.set_item(name, PyList::new(py, rows)?)?
             }
             None => d.set_item(name, PyArray1::<f64>::zeros(py, 0, false))?,
         }

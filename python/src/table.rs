@@ -15,8 +15,38 @@ use structomat::Real;
 pub enum Column {
     /// Numbers (an empty cell is NaN, a whole number its `f64`).
     Num(Vec<f64>),
-    /// Names (a mode, a coordinate choice, an event kind).
-    Text(Vec<String>),
+    /// Names (a mode, a coordinate choice, an event kind), each distinct name kept once:
+    /// row `k`'s name is `names[codes[k]]`. A mode's name repeats on every row, so a row
+    /// costs a comparison with the row before it, not a `String` (made during the run,
+    /// freed after it: outside its wall, the larger part of Python's cost beyond the run).
+    Text(Names),
+}
+
+/// A column of names, each distinct one stored once.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Names {
+    /// The distinct names, in order of first appearance.
+    pub names: Vec<String>,
+    /// Each row's index into `names`.
+    pub codes: Vec<u32>,
+}
+
+impl Names {
+    /// Appends `s`: the previous row's code when the name repeats, else the index of its
+    /// first appearance (a column holds a handful of names: a linear search).
+    fn push(&mut self, s: &str) {
+        let code = match self.codes.last() {
+            Some(&c) if self.names.get(c as usize).is_some_and(|n| n == s) => c,
+            _ => match self.names.iter().position(|n| n == s) {
+                Some(i) => i as u32,
+                None => {
+                    self.names.push(s.to_string());
+                    (self.names.len() - 1) as u32
+                }
+            },
+        };
+        self.codes.push(code);
+    }
 }
 
 /// A table: its column names and columns, in CSV order.
@@ -64,7 +94,7 @@ impl Table {
             self.columns = row
                 .iter()
                 .map(|c| match c {
-                    Cell::Text(_) => Column::Text(Vec::new()),
+                    Cell::Text(_) => Column::Text(Names::default()),
                     _ => Column::Num(Vec::new()),
                 })
                 .collect();
@@ -74,8 +104,8 @@ impl Table {
                 (Cell::Num(v), Column::Num(c)) => c.push(as_csv(*v)),
                 (Cell::Int(n), Column::Num(c)) => c.push(*n as f64),
                 (Cell::Empty, Column::Num(c)) => c.push(f64::NAN),
-                (Cell::Text(s), Column::Text(c)) => c.push((*s).to_string()),
-                (Cell::Empty, Column::Text(c)) => c.push(String::new()),
+                (Cell::Text(s), Column::Text(c)) => c.push(s),
+                (Cell::Empty, Column::Text(c)) => c.push(""),
                 _ => {
                     return Err(RunError::Setup(format!(
                         "column {name}: a name and a number in one column"
