@@ -6,7 +6,7 @@
 use structomat::ccc::{
     initial_pose, mode_model, CccParams, Clutch, Coordinates, DriveDirection, Event, EventKind,
     Inputs, LinkState, Measurement, Mode, MotorInput, Twin, TwinSettings, TwinSetupError,
-    TwinStepError,
+    TwinStepError, MAX_CONVERTER_LOAD,
 };
 use structomat::kinematics::{assemble, position};
 use structomat::motor::Motor;
@@ -994,6 +994,10 @@ fn bad_inputs_are_named_and_leave_the_state() {
         (load(nan), "load", nan),
         (load(-1.0), "load", -1.0),
         (load(inf), "load", inf),
+        // From MAX_CONVERTER_LOAD (1e6 N·m) on the release threshold -1e-9 (T_r + 1
+        // N·m) passes -1e-3 N·m: beyond the clutches' tolerance.
+        (load(MAX_CONVERTER_LOAD), "load", MAX_CONVERTER_LOAD),
+        (load(1e300), "load", 1e300),
         (motor(MotorInput::Torque(nan)), "motor torque", nan),
         (motor(MotorInput::Torque(-inf)), "motor torque", -inf),
         (
@@ -1031,11 +1035,16 @@ fn bad_inputs_are_named_and_leave_the_state() {
         );
         assert!(format!("{b:?}") == before, "{field}: the state moved");
     }
+    let e = b.step(&load(1e7)).unwrap_err();
+    assert!(e.to_string().contains("under 1e6 N·m"), "{e}");
     for _ in 0..3 {
         a.step(&inputs).unwrap();
         b.step(&inputs).unwrap();
     }
     assert!(format!("{a:?}") == format!("{b:?}"), "the twins part");
+    // Just under the limit a load is a step.
+    b.step(&load(MAX_CONVERTER_LOAD - 1.0))
+        .expect("a load just under the limit");
 }
 
 /// A bad setting is refused by name and value ([`TwinSetupError::Setting`]), each field

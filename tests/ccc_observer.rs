@@ -88,20 +88,27 @@ fn bits<T: Real>(t: &Twin<T>) -> Vec<u64> {
     v
 }
 
+/// S2's machine, its twin from the machine's start and the reference observer after
+/// `steps` good readings; the last reading.
+fn observed_for(steps: usize) -> (Machine, Twin<f64>, TwinObserver<f64>, (i64, i64)) {
+    let mut machine = Machine::new();
+    let mut t = twin::<f64>(105.0);
+    let mut obs = TwinObserver::new(ObserverSettings::reference());
+    let mut last = (0, 0);
+    for _ in 0..steps {
+        last = machine.period();
+        obs.step(&mut t, &s2_inputs(Some(reading(last))))
+            .expect("a good reading");
+    }
+    (machine, t, obs, last)
+}
+
 /// Each bad reading is refused by name (resolution 0, a zero angle that is not finite,
 /// a count that jumps by half a turn or more in a step, of each encoder) and neither the
 /// twin nor the observer moves: the state is the last good one, bit for bit.
 #[test]
 fn bad_readings_are_named_errors_and_the_state_is_kept() {
-    let mut machine = Machine::new();
-    let mut t = twin::<f64>(105.0);
-    let mut obs = TwinObserver::new(ObserverSettings::reference());
-    let mut last = (0, 0);
-    for _ in 0..30 {
-        last = machine.period();
-        obs.step(&mut t, &s2_inputs(Some(reading(last))))
-            .expect("a good reading");
-    }
+    let (_, mut t, mut obs, last) = observed_for(30);
     let (state, p) = (bits(&t), obs.covariance());
     let good: Measurement<f64> = reading(last);
     let mut cases: Vec<(Measurement<f64>, &str, &str)> = Vec::new();
@@ -127,18 +134,6 @@ fn bad_readings_are_named_errors_and_the_state_is_kept() {
             ..base
         });
         cases.push((bad, name, "zero = not a number must be finite"));
-        if k < 2 {
-            let mut bad = m;
-            *slot(&mut bad, k) = Some(Encoder {
-                counts: base.counts + 2048,
-                ..base
-            });
-            cases.push((
-                bad,
-                name,
-                "jump (counts in one step) = 2.048e3 must be under half a turn",
-            ));
-        }
     }
     for (m, name, want) in cases {
         let e = obs.step(&mut t, &s2_inputs(Some(m))).unwrap_err();
@@ -155,6 +150,64 @@ fn bad_readings_are_named_errors_and_the_state_is_kept() {
     let up = obs.step(&mut t, &s2_inputs(Some(m))).expect("a reading");
     assert!(up.diagnostics.contains(Diagnostic::EncoderJump("crank")));
     assert!(up.correction.is_none());
+    // Half a turn in a step, of either encoder: refused, named, the state kept.
+    let (crank, shaft) = (last.0 + 2047, last.1);
+    for (k, name) in ["crank", "shaft"].into_iter().enumerate() {
+        let (state, p) = (bits(&t), obs.covariance());
+        let jumped = [crank + 2048 * (1 - k as i64), shaft + 2048 * k as i64];
+        let e = obs
+            .step(&mut t, &s2_inputs(Some(reading((jumped[0], jumped[1])))))
+            .unwrap_err();
+        let want = "encoder jump (counts in one step) = 2.048e3 must be under half a turn";
+        assert!(e.to_string().contains(&format!("{name} {want}")), "{e}");
+        assert_eq!(bits(&t), state, "{name}: the twin moved");
+        assert_eq!(obs.covariance(), p, "{name}: the observer moved");
+        // The counter keeps its new offset (a reset, an index pulse): the next reading,
+        // taken from it, is no jump in a step (a refusal once, not at every step after
+        // it); the crank's offset meets the innovation's gate, named, not corrected by.
+        let up = obs
+            .step(&mut t, &s2_inputs(Some(reading((jumped[0], jumped[1])))))
+            .unwrap_or_else(|e| panic!("{name}: the reading after the offset refused: {e}"));
+        if k == 0 {
+            assert!(up.diagnostics.contains(Diagnostic::EncoderJump("crank")));
+            assert!(up.correction.is_none());
+        }
+        if k == 0 {
+            // Back to the machine's crank for the shaft's case: a jump again, refused,
+            // then taken.
+            let back = reading((crank, shaft));
+            assert!(obs.step(&mut t, &s2_inputs(Some(back))).is_err());
+            obs.step(&mut t, &s2_inputs(Some(back)))
+                .expect("the machine's reading again");
+        }
+    }
+}
+
+/// Refused steps do not leave the jump check behind the machine: a motor torque that
+/// is not a number for 0.3 s (the crank turns on, past half a turn
+/// from the last good step's reading) refuses each step, named, and the first step
+/// with a good torque is taken, the readings through the refusals its reference.
+#[test]
+fn readings_through_refused_steps_keep_the_jump_check_on_the_machine() {
+    let (mut machine, mut t, mut obs, mut last) = observed_for(200);
+    let first = last;
+    for _ in 0..300 {
+        last = machine.period();
+        let bad = Inputs {
+            motor: MotorInput::Torque(f64::NAN),
+            ..s2_inputs(Some(reading(last)))
+        };
+        let e = obs.step(&mut t, &bad).unwrap_err();
+        assert!(e.to_string().contains("motor torque"), "{e}");
+    }
+    assert!(
+        2 * (last.0 - first.0).unsigned_abs() >= u64::from(N),
+        "the machine moved {} counts",
+        last.0 - first.0
+    );
+    last = machine.period();
+    obs.step(&mut t, &s2_inputs(Some(reading(last))))
+        .expect("the first good torque after the refusals is a step");
 }
 
 /// A twin that spreads its events (issue 18's real-time option) may end a step short
@@ -723,4 +776,51 @@ fn a_twin_the_machine_leaves_is_named_parted() {
         assert!(run::<f64>(extra, load).is_some(), "{extra} N·m, {load} N·m");
         assert!(run::<f32>(extra, load).is_some(), "{extra} N·m, {load} N·m");
     }
+}
+
+/// A tuning that cannot make a filter (a NaN noise, a negative σ, a gain past 1, a
+/// bias time of 0) is refused at the step, its field named, twin and covariance as they
+/// were: a NaN covariance would otherwise stop every correction for good, unnamed.
+#[test]
+fn a_tuning_that_cannot_make_a_filter_is_named() {
+    let mut machine = Machine::new();
+    let m = reading(machine.period());
+    let good = ObserverSettings::<f64>::reference();
+    let mut bad = Vec::new();
+    let mut s = good;
+    s.accel_noise = f64::NAN;
+    bad.push((s, "accel_noise"));
+    let mut s = good;
+    s.initial_sigma.1 = -1.0;
+    bad.push((s, "initial_sigma.1"));
+    let mut s = good;
+    s.held_gain = 1.5;
+    bad.push((s, "held_gain"));
+    let mut s = good;
+    s.bias_time = 0.0;
+    bad.push((s, "bias_time"));
+    let mut s = good;
+    s.torque_limit = f64::NAN;
+    bad.push((s, "torque_limit"));
+    for (s, name) in bad {
+        let want = format!("observer settings: {name}");
+        assert_eq!(s.fault().map(|f| f.0), Some(want.as_str()));
+        let mut t = twin::<f64>(105.0);
+        let mut obs = TwinObserver::new(s);
+        let (state, p) = (bits(&t), obs.covariance());
+        let e = obs.step(&mut t, &s2_inputs(Some(m))).unwrap_err();
+        assert!(
+            e.to_string()
+                .contains(&format!("observer settings: {name}")),
+            "{e}"
+        );
+        assert_eq!(bits(&t), state, "{name}: the twin moved");
+        assert_eq!(obs.covariance(), p, "{name}: the observer moved");
+    }
+    // Limits may be infinite (none): the bias diagnostic off is the reference's way.
+    let mut s = good;
+    s.bias_limit = f64::INFINITY;
+    assert_eq!(s.fault(), None);
+    assert_eq!(good.fault(), None);
+    assert_eq!(ObserverSettings::<f64>::identified().fault(), None);
 }

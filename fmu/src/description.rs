@@ -24,7 +24,7 @@ pub const LOG_CATEGORIES: [(&str, &str); 3] = [
 ];
 
 /// The units: name and SI base-unit exponents (kg, m, s, rad) and a degree's factor.
-const UNITS: [(&str, &str); 10] = [
+const UNITS: [(&str, &str); 11] = [
     ("s", r#"s="1""#),
     ("m", r#"m="1""#),
     ("kg", r#"kg="1""#),
@@ -34,6 +34,7 @@ const UNITS: [(&str, &str); 10] = [
     ("deg", r#"rad="1" factor="0.017453292519943295""#),
     ("rad/s", r#"rad="1" s="-1""#),
     ("N.m", r#"kg="1" m="2" s="-2""#),
+    ("N.m.s/rad", r#"kg="1" m="2" s="-1" rad="-1""#),
     ("J", r#"kg="1" m="2" s="-2""#),
 ];
 
@@ -221,5 +222,22 @@ mod tests {
             );
         }
         assert!(xml.contains("stepSize=\"0.0001\""));
+    }
+
+    // Every variable's unit is one the UnitDefinitions define (an importer refuses a
+    // description whose variable names an undefined unit).
+    #[test]
+    fn every_unit_is_defined() {
+        for v in crate::variables::VARIABLES
+            .iter()
+            .filter(|v| !v.unit.is_empty())
+        {
+            assert!(
+                UNITS.iter().any(|(u, _)| *u == v.unit),
+                "{}: {}",
+                v.name,
+                v.unit
+            );
+        }
     }
 }

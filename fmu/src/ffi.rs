@@ -267,6 +267,11 @@ pub unsafe extern "C" fn fmi2SetDebugLogging(
     categories: *const FmiString,
 ) -> Status {
     with(c, |inst| {
+        if n > 0 && categories.is_null() {
+            return inst.fail(&format!(
+                "fmi2SetDebugLogging: a null array with {n} categories"
+            ));
+        }
         // SAFETY: `n` strings from the importer.
         let cats = unsafe { slice(categories, n) };
         for &cat in cats {
@@ -376,9 +381,12 @@ pub unsafe extern "C" fn fmi2GetString(
     c: Component,
     vr: *const ValueReference,
     n: usize,
-    _value: *mut FmiString,
+    value: *mut FmiString,
 ) -> Status {
     with(c, |inst| {
+        if let Some(s) = null_args(inst, "fmi2GetString", n, &[vr.is_null(), value.is_null()]) {
+            return s;
+        }
         // SAFETY: `n` references.
         let refs = unsafe { slice(vr, n) };
         match refs.first() {
@@ -412,9 +420,12 @@ pub unsafe extern "C" fn fmi2SetInteger(
     c: Component,
     vr: *const ValueReference,
     n: usize,
-    _value: *const c_int,
+    value: *const c_int,
 ) -> Status {
     with(c, |inst| {
+        if let Some(s) = null_args(inst, "fmi2SetInteger", n, &[vr.is_null(), value.is_null()]) {
+            return s;
+        }
         // SAFETY: `n` references.
         let refs = unsafe { slice(vr, n) };
         inst.set_other("fmi2SetInteger", "Integer", refs)
@@ -444,9 +455,12 @@ pub unsafe extern "C" fn fmi2SetString(
     c: Component,
     vr: *const ValueReference,
     n: usize,
-    _value: *const FmiString,
+    value: *const FmiString,
 ) -> Status {
     with(c, |inst| {
+        if let Some(s) = null_args(inst, "fmi2SetString", n, &[vr.is_null(), value.is_null()]) {
+            return s;
+        }
         // SAFETY: `n` references.
         let refs = unsafe { slice(vr, n) };
         inst.set_other("fmi2SetString", "String", refs)

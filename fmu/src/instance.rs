@@ -360,6 +360,13 @@ impl Instance {
 
     /// `fmi2GetReal`.
     pub fn get_real(&mut self, refs: &[u32], values: &mut [f64]) -> Status {
+        // A reference that names no variable is the importer's error, said first (not
+        // the outputs' state, nor a set-up it would trigger).
+        if let Some(r) = refs.iter().find(|&&r| r as usize >= N_REAL) {
+            return self.fail(&format!(
+                "fmi2GetReal: no Real variable has value reference {r}"
+            ));
+        }
         let any_output = refs.iter().any(|&r| r >= vr::FIRST_OUTPUT);
         if any_output {
             if let Err(s) = self.outputs_ready("fmi2GetReal") {

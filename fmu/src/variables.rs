@@ -137,6 +137,55 @@ const HEAD: [Variable; 7] = [
     par("H.y", "m", "output shaft H, y"),
 ];
 
+/// The losses of a real machine (SPEC 5; `CccParams::friction`, 0 by default): each
+/// joint's viscous and dry coefficients, in `FRICTION_JOINTS`' order, then the dry
+/// friction's regularization speed and the overrunning clutches' drag.
+macro_rules! joint_friction {
+    ($j:literal) => {
+        [
+            par(
+                concat!("friction.viscous.", $j),
+                "N.m.s/rad",
+                concat!(
+                    "viscous friction of joint ",
+                    $j,
+                    " on its relative angular speed"
+                ),
+            ),
+            par(
+                concat!("friction.coulomb.", $j),
+                "N.m",
+                concat!("dry (Coulomb) friction torque of joint ", $j),
+            ),
+        ]
+    };
+}
+
+const JOINT_FRICTION: [[Variable; 2]; 9] = [
+    joint_friction!("A"),
+    joint_friction!("B"),
+    joint_friction!("C"),
+    joint_friction!("E"),
+    joint_friction!("F"),
+    joint_friction!("D5"),
+    joint_friction!("D7"),
+    joint_friction!("G"),
+    joint_friction!("I"),
+];
+
+const FRICTION_TAIL: [Variable; 2] = [
+    par(
+        "friction.coulomb_eps",
+        "rad/s",
+        "the dry friction's regularization speed: under it a joint acts as a viscous one of coefficient coulomb/eps (> 0)",
+    ),
+    par(
+        "friction.clutch_drag",
+        "N.m.s/rad",
+        "drag of an overrunning clutch on the lever's speed relative to the shaft",
+    ),
+];
+
 /// The Real variables after the links: the rest of the converter, its initial
 /// state, the inputs and the outputs.
 const TAIL: [Variable; 25] = [
@@ -264,7 +313,8 @@ const DISCRETE: [Variable; 6] = [
 ];
 
 /// Number of Real variables.
-pub const N_REAL: usize = HEAD.len() + 3 * LINKS.len() + TAIL.len();
+pub const N_REAL: usize =
+    HEAD.len() + 3 * LINKS.len() + 2 * JOINT_FRICTION.len() + FRICTION_TAIL.len() + TAIL.len();
 /// Number of Boolean variables.
 pub const N_BOOL: usize = 5;
 
@@ -289,6 +339,24 @@ pub const VARIABLES: [Variable; N_REAL + 1 + N_BOOL] = {
         }
         p += 1;
     }
+    p = 0;
+    while p < JOINT_FRICTION.len() {
+        all[k] = JOINT_FRICTION[p][0];
+        k += 1;
+        p += 1;
+    }
+    p = 0;
+    while p < JOINT_FRICTION.len() {
+        all[k] = JOINT_FRICTION[p][1];
+        k += 1;
+        p += 1;
+    }
+    i = 0;
+    while i < FRICTION_TAIL.len() {
+        all[k] = FRICTION_TAIL[i];
+        k += 1;
+        i += 1;
+    }
     i = 0;
     while i < TAIL.len() {
         all[k] = TAIL[i];
@@ -312,32 +380,36 @@ pub mod vr {
     pub const A_X: u32 = 1;
     /// link1.length; link p's (length, mass, inertia) are at `LINK + 3 (p - 1) + 0..3`.
     pub const LINK: u32 = 7;
+    /// friction.viscous.A: joint k's viscous coefficient (`FRICTION_JOINTS`' order) at
+    /// `FRICTION + k`, its dry one at `FRICTION + 9 + k`; coulomb_eps at `FRICTION + 18`,
+    /// clutch_drag at `FRICTION + 19`.
+    pub const FRICTION: u32 = LINK + 24;
     /// rocker_d.
-    pub const ROCKER_D: u32 = 31;
+    pub const ROCKER_D: u32 = FRICTION + 20;
     /// mass.
-    pub const MASS: u32 = 32;
+    pub const MASS: u32 = ROCKER_D + 1;
     /// mass_inertia.
-    pub const MASS_INERTIA: u32 = 33;
+    pub const MASS_INERTIA: u32 = ROCKER_D + 2;
     /// mass_at.
-    pub const MASS_AT: u32 = 34;
+    pub const MASS_AT: u32 = ROCKER_D + 3;
     /// shaft_inertia.
-    pub const SHAFT_INERTIA: u32 = 35;
+    pub const SHAFT_INERTIA: u32 = ROCKER_D + 4;
     /// gravity.x (gravity.y follows).
-    pub const GRAVITY_X: u32 = 36;
+    pub const GRAVITY_X: u32 = ROCKER_D + 5;
     /// initial.crank_deg.
-    pub const CRANK_DEG: u32 = 38;
+    pub const CRANK_DEG: u32 = ROCKER_D + 7;
     /// initial.swing_deg.
-    pub const SWING_DEG: u32 = 39;
+    pub const SWING_DEG: u32 = ROCKER_D + 8;
     /// initial.crank_speed.
-    pub const CRANK_SPEED0: u32 = 40;
+    pub const CRANK_SPEED0: u32 = ROCKER_D + 9;
     /// initial.swing_speed.
-    pub const SWING_SPEED0: u32 = 41;
+    pub const SWING_SPEED0: u32 = ROCKER_D + 10;
     /// The input motor_torque.
-    pub const MOTOR: u32 = 42;
+    pub const MOTOR: u32 = ROCKER_D + 11;
     /// The input load_torque.
-    pub const LOAD: u32 = 43;
+    pub const LOAD: u32 = ROCKER_D + 12;
     /// The first output (crank_angle); the outputs run to the last Real.
-    pub const FIRST_OUTPUT: u32 = 44;
+    pub const FIRST_OUTPUT: u32 = ROCKER_D + 13;
     /// The Integer output mode.
     pub const MODE: u32 = 0;
     /// The Booleans: clutch, ccw, branch_c_left, branch_g_left, branch_i_left.
@@ -414,6 +486,11 @@ impl Start {
             let i = vr::LINK as usize + 3 * k;
             r[i..i + 3].copy_from_slice(&[b.length, b.mass, b.inertia]);
         }
+        let f = vr::FRICTION as usize;
+        r[f..f + 9].copy_from_slice(&p.friction.viscous);
+        r[f + 9..f + 18].copy_from_slice(&p.friction.coulomb);
+        r[f + 18] = p.friction.coulomb_eps;
+        r[f + 19] = p.friction.clutch_drag;
         r[vr::ROCKER_D as usize] = p.rocker_d;
         r[vr::MASS as usize] = p.mass;
         r[vr::MASS_INERTIA as usize] = p.mass_inertia;
@@ -444,6 +521,11 @@ impl Start {
             b.mass = at(i + 1);
             b.inertia = at(i + 2);
         }
+        let f = vr::FRICTION as usize;
+        p.friction.viscous.copy_from_slice(&r[f..f + 9]);
+        p.friction.coulomb.copy_from_slice(&r[f + 9..f + 18]);
+        p.friction.coulomb_eps = at(vr::FRICTION + 18);
+        p.friction.clutch_drag = at(vr::FRICTION + 19);
         p.rocker_d = at(vr::ROCKER_D);
         p.mass = at(vr::MASS);
         p.mass_inertia = at(vr::MASS_INERTIA);
@@ -556,6 +638,15 @@ mod tests {
         assert_eq!(real(vr::A_X), Some("A.x"));
         assert_eq!(real(vr::LINK), Some("link1.length"));
         assert_eq!(real(vr::LINK + 3 * 7 + 2), Some("link8.inertia"));
+        // The joints' friction in the core's joint order, named by SPEC's letters.
+        for (k, j) in structomat::ccc::FRICTION_JOINT_NAMES.iter().enumerate() {
+            let viscous = format!("friction.viscous.{j}");
+            let coulomb = format!("friction.coulomb.{j}");
+            assert_eq!(real(vr::FRICTION + k as u32), Some(viscous.as_str()));
+            assert_eq!(real(vr::FRICTION + 9 + k as u32), Some(coulomb.as_str()));
+        }
+        assert_eq!(real(vr::FRICTION + 18), Some("friction.coulomb_eps"));
+        assert_eq!(real(vr::FRICTION + 19), Some("friction.clutch_drag"));
         assert_eq!(real(vr::ROCKER_D), Some("rocker_d"));
         assert_eq!(real(vr::GRAVITY_X + 1), Some("gravity.y"));
         assert_eq!(real(vr::SWING_SPEED0), Some("initial.swing_speed"));
@@ -597,6 +688,19 @@ mod tests {
         let (back, guid) = Start::parse(&text).unwrap();
         assert_eq!(back, s);
         assert_eq!(guid.as_deref(), Some("{x}"));
+        // A machine's losses, every coefficient its own value, go there and back.
+        let mut p = CccParams::<f64>::reference();
+        for k in 0..9 {
+            p.friction.viscous[k] = 0.01 * (k + 1) as f64;
+            p.friction.coulomb[k] = 0.1 + 0.01 * k as f64;
+        }
+        p.friction.coulomb_eps = 0.02;
+        p.friction.clutch_drag = 0.05;
+        let mut f = Start::default();
+        f.set_params(&p);
+        assert_eq!(f.params(), p);
+        let (back, _) = Start::parse(&f.file_text("{y}")).unwrap();
+        assert_eq!(back.params(), p);
         let e = Start::parse("mass = NaN").unwrap_err();
         assert!(e.contains("line 1") && e.contains("mass"), "{e}");
         let e = Start::parse("\ncrank_angle = 1").unwrap_err();

@@ -375,3 +375,106 @@ fn a_saved_state_replays_bit_for_bit() {
     assert_eq!(unsafe { fmi2FreeFMUstate(fmu.c, &mut state) }, Status::Ok);
     assert!(state.is_null());
 }
+
+// A machine's losses set as parameters (every joint's viscous and dry coefficient, ε,
+// the clutches' drag) make the FMU the core's twin of that machine, bit for bit through
+// S2's first 0.1 s; the twin without them is another machine (its outputs differ): the
+// parameters reach the twin.
+#[test]
+fn friction_parameters_are_the_twin_s_friction() {
+    let h = 1e-4;
+    let mut p = CccParams::reference();
+    for k in 0..9 {
+        p.friction.viscous[k] = 0.01 + 0.002 * k as f64;
+        p.friction.coulomb[k] = 0.02 + 0.001 * k as f64;
+    }
+    p.friction.coulomb_eps = 0.02;
+    p.friction.clutch_drag = 0.03;
+    let fmu = Fmu::new();
+    let f = vr::FRICTION;
+    for k in 0..9u32 {
+        assert_eq!(fmu.set(f + k, p.friction.viscous[k as usize]), Status::Ok);
+        assert_eq!(
+            fmu.set(f + 9 + k, p.friction.coulomb[k as usize]),
+            Status::Ok
+        );
+    }
+    assert_eq!(fmu.set(f + 18, p.friction.coulomb_eps), Status::Ok);
+    assert_eq!(fmu.set(f + 19, p.friction.clutch_drag), Status::Ok);
+    fmu.init();
+    let inputs = Inputs {
+        motor: MotorInput::Torque(12.0),
+        load: 800.0,
+        measured: None,
+    };
+    let mut twin = Twin::new(p, TwinSettings::reference(h), inputs).unwrap();
+    let mut ideal = s2_twin(h);
+    for k in 0..1000u32 {
+        assert_eq!(
+            fmi2DoStep(fmu.c, f64::from(k) * h, h, 1),
+            Status::Ok,
+            "{:?}",
+            fmu.log
+        );
+        twin.step(&inputs).unwrap();
+        ideal.step(&inputs).unwrap();
+        same(&fmu, &twin, &format!("step {}", k + 1));
+    }
+    assert_ne!(
+        outputs(&twin),
+        outputs(&ideal),
+        "the losses changed nothing"
+    );
+    // A coefficient the core refuses is named at initialization.
+    let bad = Fmu::new();
+    assert_eq!(bad.set(f + 18, 0.0), Status::Ok);
+    assert_eq!(fmi2SetupExperiment(bad.c, 0, 0.0, 0.0, 0, 0.0), Status::Ok);
+    assert_eq!(fmi2EnterInitializationMode(bad.c), Status::Ok);
+    assert_eq!(fmi2ExitInitializationMode(bad.c), Status::Error);
+    assert!(bad.last().contains("coulomb_eps"), "{}", bad.last());
+}
+
+// Null arrays with a count > 0 are the importer's error on every call that takes
+// arrays, named (they returned fmi2OK for the String and Integer setters); a value
+// reference that names no variable is said as such, before the outputs' state.
+#[test]
+fn null_arrays_and_unknown_references_are_named() {
+    let fmu = Fmu::new();
+    let null_vr = core::ptr::null::<u32>();
+    let mut s: FmiString = core::ptr::null();
+    let r = [0u32];
+    let cases: [(&str, Status); 4] = [
+        ("fmi2GetString", unsafe {
+            fmi2GetString(fmu.c, null_vr, 3, &mut s)
+        }),
+        ("fmi2SetInteger", unsafe {
+            fmi2SetInteger(fmu.c, r.as_ptr(), 1, core::ptr::null())
+        }),
+        ("fmi2SetString", unsafe {
+            fmi2SetString(fmu.c, null_vr, 2, core::ptr::null())
+        }),
+        ("fmi2SetDebugLogging", unsafe {
+            fmi2SetDebugLogging(fmu.c, 1, 2, core::ptr::null())
+        }),
+    ];
+    for (call, status) in cases {
+        assert_eq!(status, Status::Error, "{call}");
+    }
+    let nulls = fmu
+        .log
+        .iter()
+        .filter(|m| m.2.contains("a null array"))
+        .count();
+    assert_eq!(nulls, 4, "{:?}", fmu.log);
+    let mut v = 0.0;
+    assert_eq!(
+        unsafe { fmi2GetReal(fmu.c, &1000, 1, &mut v) },
+        Status::Error
+    );
+    assert!(
+        fmu.last()
+            .contains("no Real variable has value reference 1000"),
+        "{}",
+        fmu.last()
+    );
+}

@@ -127,6 +127,9 @@ pub enum RunError {
     /// A batch's or a sweep's run not started: SIGINT or SIGTERM came first (exit code
     /// 130, as the interrupted runs').
     NotRun,
+    /// A command stopped by SIGINT or SIGTERM before its result was whole (exit code
+    /// 130): what it was doing, and that nothing was written.
+    Interrupted(&'static str),
     /// Writing the CSV failed: exit code 1.
     Write {
         /// The file's path, or `stdout`.
@@ -141,7 +144,7 @@ impl RunError {
     pub fn exit_code(&self) -> u8 {
         match self {
             RunError::Usage(_) => EXIT_USAGE,
-            RunError::NotRun => EXIT_INTERRUPTED,
+            RunError::NotRun | RunError::Interrupted(_) => EXIT_INTERRUPTED,
             _ => EXIT_FAILURE,
         }
     }
@@ -183,6 +186,12 @@ impl fmt::Display for RunError {
             ),
             RunError::NotRun => {
                 f.write_str("not run: interrupted (SIGINT or SIGTERM) before it started")
+            }
+            RunError::Interrupted(what) => {
+                write!(
+                    f,
+                    "interrupted (SIGINT or SIGTERM) during {what}: nothing written"
+                )
             }
             RunError::Write { target, error } => write!(f, "cannot write {target}: {error}"),
         }

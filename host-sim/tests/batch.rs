@@ -324,3 +324,37 @@ fn an_end_at_a_singularity_has_one_exit_status() {
         }
     }
 }
+
+/// A run file whose path holds a comma and a quote (`T_r=800,motor="12".toml`) is one
+/// cell of `batch.csv`'s scenario column, quoted as the CSV standard says: every record
+/// has the header's columns (the path unquoted shifted every later column of its row).
+/// Oracle: the csv crate's reader.
+#[test]
+fn a_scenario_named_with_a_comma_is_one_cell() {
+    let tmp = TempDir::new("batch-comma");
+    let scenarios = concat!(env!("CARGO_MANIFEST_DIR"), "/scenarios/five-bar.toml");
+    let text = std::fs::read_to_string(scenarios).expect("five-bar's run file");
+    let file = tmp.join("T_r=800,motor=\"12\".toml");
+    std::fs::write(&file, text).expect("write the run file");
+    let batch_path = batch_file(
+        &tmp,
+        &format!("{file} --t-end 0.01\nfive-bar --t-end 0.01\n"),
+    );
+    let dir = tmp.join("out");
+    let (code, _, err) = batch(&batch_path, &dir, 1);
+    assert_eq!(code, 0, "{err}");
+    let mut reader = csv::Reader::from_path(Path::new(&dir).join("batch.csv")).expect("batch.csv");
+    let header = reader.headers().expect("a header").clone();
+    assert_eq!(header.len(), TABLE_COLUMNS.len());
+    let scenario = TABLE_COLUMNS
+        .iter()
+        .position(|c| *c == "scenario")
+        .expect("a column");
+    let records: Vec<csv::StringRecord> = reader.records().map(|r| r.expect("a record")).collect();
+    assert_eq!(records.len(), 2);
+    for r in &records {
+        assert_eq!(r.len(), TABLE_COLUMNS.len(), "{r:?}");
+    }
+    assert_eq!(&records[0][scenario], file.as_str());
+    assert_eq!(&records[1][scenario], "five-bar");
+}

@@ -113,3 +113,26 @@ fn a_missing_binary_says_how_to_build_it() {
     assert!(e.contains("cargo build --release -p structomat-fmu"), "{e}");
     assert!(!out.exists());
 }
+
+// A run file's losses (bench1 as `identify` found it: four joints' viscous friction)
+// are the FMU's start values: the FMU's converter is the run file's, friction and all
+// (the oracle: the run file's own numbers, read here).
+#[test]
+fn a_run_file_s_friction_is_in_the_start_values() {
+    let path = "tests/data/bench1-identified.toml";
+    let d = description(&options(&["fmu", path, "--out", "x.fmu"]).unwrap()).unwrap();
+    let text = std::fs::read_to_string(path).unwrap();
+    let value: toml::Value = toml::from_str(&text).unwrap();
+    let viscous = &value["converter"]["friction"]["viscous"];
+    let p = d.start.params();
+    for (k, j) in structomat::ccc::FRICTION_JOINT_NAMES.iter().enumerate() {
+        let want = viscous.get(*j).and_then(|v| v.as_float()).unwrap_or(0.0);
+        assert_eq!(p.friction.viscous[k], want, "joint {j}");
+        assert_eq!(
+            d.start.reals[(vr::FRICTION as usize) + k],
+            want,
+            "joint {j}"
+        );
+    }
+    assert!(p.friction.active(), "the identified machine's friction");
+}

@@ -467,3 +467,42 @@ fn the_motor_offset_is_added_to_the_measured_torque() {
         std::fs::read(dir.join("b.csv")).unwrap()
     );
 }
+
+/// A parameter whose base value is 0 has no search range (±10 % of 0): asked to fit
+/// it, identify refuses before any replay, naming it, and writes nothing (it fitted
+/// nothing and gave every parameter a NaN σ).
+#[test]
+fn a_parameter_at_zero_is_refused_by_name() {
+    let dir = TempDir::new("identify-zero");
+    let s2 = concat!(env!("CARGO_MANIFEST_DIR"), "/scenarios/ccc-s2.toml");
+    let text = std::fs::read_to_string(s2).unwrap();
+    assert!(text.contains("mass_inertia = 0.0400"));
+    let params = dir.join("zero.toml");
+    std::fs::write(
+        &params,
+        text.replacen("mass_inertia = 0.0400", "mass_inertia = 0.0", 1),
+    )
+    .unwrap();
+    let out = dir.join("identified.toml");
+    let log = data("bench1.csv");
+    let e = identify::run(&identify_options(&[
+        &log,
+        "--params",
+        &params,
+        "--fit",
+        "converter.mass,converter.mass_inertia",
+        "--out",
+        &out,
+        "--quiet",
+    ]));
+    let Err(e) = e else {
+        panic!("identify fitted a parameter of base value 0")
+    };
+    assert_eq!(e.exit_code(), 2, "{e}");
+    let text = e.to_string();
+    assert!(
+        text.contains("converter.mass_inertia") && text.contains("is 0"),
+        "{text}"
+    );
+    assert!(!std::path::Path::new(&out).exists());
+}

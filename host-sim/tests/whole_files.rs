@@ -241,3 +241,38 @@ fn sigint_stops_a_batch_with_whole_files() {
     // runs that did not start.
     assert_eq!(common::files(std::path::Path::new(&out)).len(), 2);
 }
+
+/// `host-sim identify` stopped by SIGINT mid-search writes no run file (a half-fitted
+/// one, its later replays stopped at their start, would read as identified) and exits
+/// 130 naming the interruption; nothing is left in the output's folder.
+#[test]
+fn an_interrupted_identify_writes_no_run_file() {
+    let dir = TempDir::new("identify-sigint");
+    let out = dir.join("identified.toml");
+    let child = Command::new(env!("CARGO_BIN_EXE_host-sim"))
+        .args(["identify", "tests/data/bench1.csv", "--out", &out])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("start host-sim");
+    // bench1's search takes a minute in release, longer in debug: 2 s in, it is under way.
+    std::thread::sleep(Duration::from_secs(2));
+    let status = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .expect("kill");
+    assert!(status.success());
+    let done = child.wait_with_output().expect("wait for host-sim");
+    let err = String::from_utf8_lossy(&done.stderr);
+    assert_eq!(done.status.code(), Some(130), "{err}");
+    assert!(
+        err.contains("interrupted (SIGINT or SIGTERM) during identify"),
+        "{err}"
+    );
+    assert!(!Path::new(&out).exists(), "a run file was written");
+    let left: Vec<_> = std::fs::read_dir(&dir.path)
+        .expect("the folder")
+        .filter_map(|e| e.ok())
+        .collect();
+    assert!(left.is_empty(), "{left:?}");
+}

@@ -8,6 +8,7 @@
 //! file's path and one design.
 
 use crate::errors::error;
+use crate::run::with_signals;
 use host_sim::jobs::design::evolution::Score;
 use host_sim::jobs::design::file::{read_design, Design};
 use host_sim::jobs::design::search::{self, replay};
@@ -61,7 +62,7 @@ pub fn design_evaluate(py: Python<'_>, path: &str, x: Vec<f64>) -> PyResult<Wire
             d.free.len()
         )));
     }
-    let s = py.detach(|| {
+    let (s, signal) = with_signals(py, || {
         let evals: Vec<_> = d
             .points
             .iter()
@@ -69,6 +70,9 @@ pub fn design_evaluate(py: Python<'_>, path: &str, x: Vec<f64>) -> PyResult<Wire
             .collect();
         search::score(&d, &evals)
     });
+    if let Some(e) = signal {
+        return Err(e);
+    }
     Ok((s.violation, s.objective))
 }
 

@@ -26,18 +26,30 @@ pub const RUN_KEYWORDS: [&str; 10] = [
     "spread_events",
 ];
 
-/// The text of a number keyword `name`: a Python `int` or `float` (not a `bool`), as
-/// its `repr`; anything else is a `TypeError` naming the keyword.
+/// The text of a number keyword `name`: a Python `int` (or an object with `__index__`,
+/// a numpy integer) as its `int`'s `repr`, anything else that converts to a float (a
+/// `float`, a numpy float) as that `float`'s `repr` (the repr of a subclass may not be
+/// a number: numpy 2 writes `np.float64(500.0)`); a `bool` or anything else is a
+/// `TypeError` naming the keyword.
 fn number(name: &str, v: &Bound<'_, PyAny>) -> PyResult<String> {
-    if v.is_instance_of::<PyBool>()
-        || !(v.is_instance_of::<PyFloat>() || v.is_instance_of::<PyInt>())
-    {
-        return Err(PyTypeError::new_err(format!(
+    let refused = || -> PyResult<String> {
+        Err(PyTypeError::new_err(format!(
             "{name}: a number expected, got {}",
             v.get_type().name()?
-        )));
+        )))
+    };
+    if v.is_instance_of::<PyBool>() {
+        return refused();
     }
-    Ok(v.repr()?.to_string())
+    let py = v.py();
+    if v.is_instance_of::<PyInt>() || v.hasattr("__index__")? {
+        let int = py.get_type::<PyInt>().call1((v,))?;
+        return Ok(int.repr()?.to_string());
+    }
+    match v.extract::<f64>() {
+        Ok(x) => Ok(PyFloat::new(py, x).repr()?.to_string()),
+        Err(_) => refused(),
+    }
 }
 
 /// A flag keyword `name`: a Python `bool`.

@@ -20,14 +20,11 @@ use std::time::{Duration, Instant};
 /// KeyboardInterrupt arrives within this plus one step and the last row.
 pub const SIGNAL_POLL: Duration = Duration::from_millis(20);
 
-/// Runs `opts` in its precision with the GIL released, polling the interpreter's
-/// signals every [`SIGNAL_POLL`] through the runners' interrupt hook: a signal
-/// handler's exception (KeyboardInterrupt) stops the run after its present step and is
-/// returned as the third value.
-pub fn observed(
-    py: Python<'_>,
-    opts: &RunOptions,
-) -> (Gathered, Result<Report, RunError>, Option<PyErr>) {
+/// Runs `f` with the GIL released, polling the interpreter's signals every
+/// [`SIGNAL_POLL`] through host-sim's interrupt hook (this thread's): a signal
+/// handler's exception (KeyboardInterrupt) makes the runners stop (a run after its
+/// present step, a sweep's variants not started) and is returned beside `f`'s value.
+pub fn with_signals<R: Send>(py: Python<'_>, f: impl FnOnce() -> R + Send) -> (R, Option<PyErr>) {
     py.detach(|| {
         let caught: Rc<RefCell<Option<PyErr>>> = Rc::new(RefCell::new(None));
         let seen = Rc::clone(&caught);
@@ -48,17 +45,29 @@ pub fn observed(
                 }
             }
         };
-        let mut gathered = Gathered::default();
-        let report = interrupt::with_hook(hook, || {
-            if opts.f32 {
-                simulate::<f32>(opts, &mut gathered)
-            } else {
-                simulate::<f64>(opts, &mut gathered)
-            }
-        });
+        let out = interrupt::with_hook(hook, f);
         let signal = caught.borrow_mut().take();
-        (gathered, report, signal)
+        (out, signal)
     })
+}
+
+/// Runs `opts` in its precision with the GIL released and Ctrl-C answered
+/// ([`with_signals`]): the run stops after its present step and the signal's exception
+/// is returned as the third value.
+pub fn observed(
+    py: Python<'_>,
+    opts: &RunOptions,
+) -> (Gathered, Result<Report, RunError>, Option<PyErr>) {
+    let ((gathered, report), signal) = with_signals(py, || {
+        let mut gathered = Gathered::default();
+        let report = if opts.f32 {
+            simulate::<f32>(opts, &mut gathered)
+        } else {
+            simulate::<f64>(opts, &mut gathered)
+        };
+        (gathered, report)
+    });
+    (gathered, report, signal)
 }
 
 /// Runs `source` (a built-in scenario's name or a run file's path) with the keyword

@@ -7,6 +7,7 @@
 //! carries only the file's path and its variants' numbers.
 
 use crate::errors::error;
+use crate::run::with_signals;
 use host_sim::sweep::{self, Job, Outcome, Sweep, ENDS};
 use pyo3::prelude::*;
 use std::path::Path;
@@ -44,7 +45,7 @@ pub fn sweep_run(py: Python<'_>, path: &str, which: Vec<usize>) -> PyResult<Vec<
     if let Some(k) = which.iter().find(|&&k| k >= total) {
         return Err(error(format!("{path}: no variant {k} (it has {total})")));
     }
-    Ok(py.detach(|| {
+    let (outcomes, signal) = with_signals(py, || {
         which
             .iter()
             .map(|&k| {
@@ -58,7 +59,13 @@ pub fn sweep_run(py: Python<'_>, path: &str, which: Vec<usize>) -> PyResult<Vec<
                 )
             })
             .collect()
-    }))
+    });
+    // Ctrl-C: the variant under way stopped after its step, the rest not run; the
+    // batch's outcomes are not a sweep's and are dropped.
+    match signal {
+        Some(e) => Err(e),
+        None => Ok(outcomes),
+    }
 }
 
 /// Writes `sweep.csv` and the heat-maps of the sweep file `path` into `out_dir`

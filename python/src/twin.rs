@@ -12,6 +12,7 @@ use host_sim::ccc::{columns, new_twin, row, settings};
 use host_sim::options::Steps;
 use host_sim::output::Cell;
 use numpy::PyArray1;
+use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 use structomat::ccc::{Inputs, Measurement, MotorInput, Twin as CoreTwin};
@@ -76,6 +77,14 @@ impl Twin {
     #[new]
     #[pyo3(signature = (source = "ccc-s2", **overrides))]
     fn new(source: &str, overrides: Option<&Bound<'_, PyDict>>) -> PyResult<Self> {
+        // A run's keywords that a twin has no use for: refused, not ignored.
+        for key in ["t_end", "every"] {
+            if overrides.is_some_and(|kw| kw.contains(key).unwrap_or(false)) {
+                return Err(PyTypeError::new_err(format!(
+                    "unexpected keyword argument '{key}' (a twin has no run: the keywords of a twin: h, step, f32, f64, motor, load, ccw, spread_events)"
+                )));
+            }
+        }
         let opts = run_options(source, overrides)?;
         let name = opts.scenario.name().to_string();
         let s = settings(&opts).ok_or_else(|| {

@@ -57,13 +57,12 @@ class Twin:
         *,
         h: Optional[float] = ...,
         step: Optional[float] = ...,
-        t_end: Optional[float] = ...,
         f32: bool = ...,
         f64: bool = ...,
         motor: Optional[float] = ...,
         load: Optional[float] = ...,
         ccw: bool = ...,
-    spread_events: bool = ...,
+        spread_events: bool = ...,
     ) -> None: ...
     def step(
         self,

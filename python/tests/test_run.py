@@ -150,3 +150,21 @@ def test_the_gil_is_released_during_a_run():
     # The other thread kept running: a tick every ~5 ms of the run's wall time.
     assert r.summary["wall"] > 0.1
     assert len(during) >= 0.25 * (t1 - t0) / 0.005
+
+
+def test_numpy_numbers_are_numbers():
+    """A numpy float or integer (a loop over np.linspace, a load from an array) is its
+    value: the run equals the one given the plain Python number, bit for bit."""
+    import numpy as np
+    plain = structomat.run("ccc-s2", t_end=0.05, load=500.0, every=5)
+    for load, every in [(np.float64(500.0), np.int64(5)), (np.float32(500.0), 5),
+                        (500, np.int32(5))]:
+        r = structomat.run("ccc-s2", t_end=0.05, load=load, every=every)
+        assert r.summary["rows"] == plain.summary["rows"]
+        for name, col in plain.columns.items():
+            if isinstance(col, np.ndarray):
+                assert col.tobytes() == r.columns[name].tobytes(), name
+    with pytest.raises(TypeError, match="load: a number expected"):
+        structomat.run("ccc-s2", t_end=0.05, load="500")
+    with pytest.raises(TypeError, match="load: a number expected"):
+        structomat.run("ccc-s2", t_end=0.05, load=True)

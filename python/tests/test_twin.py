@@ -106,7 +106,10 @@ def test_a_refused_step_raises_and_keeps_the_last_good_state():
     for _ in range(10):
         twin.step(12.0, 800.0)
     before = twin.state()
-    for bad in [dict(motor=math.nan), dict(motor=12.0, load=-1.0), dict(motor=math.inf)]:
+    # A load past 1e6 N·m is beyond the clutches' torque tolerance: the core refuses it
+    # (host-sim refuses it in options, run files and logs).
+    for bad in [dict(motor=math.nan), dict(motor=12.0, load=-1.0), dict(motor=math.inf),
+                dict(motor=12.0, load=1e7)]:
         with pytest.raises(structomat.TwinError) as e:
             twin.step(**bad)
         assert isinstance(e.value, structomat.Error)
@@ -129,3 +132,7 @@ def test_a_mechanism_is_no_twin():
         structomat.Twin("five-bar")
     with pytest.raises(TypeError, match="'speed'"):
         structomat.Twin("ccc-s2", speed=3)
+    # A run's keywords that a twin has no use for are refused, not ignored.
+    for kw in [dict(t_end=0.5), dict(every=10)]:
+        with pytest.raises(TypeError, match="a twin has no run"):
+            structomat.Twin("ccc-s2", **kw)

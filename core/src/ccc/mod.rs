@@ -23,6 +23,6 @@ pub use twin::{
     energy_tolerance, Audit, Converter, CoordinateSwitch, Correction, Encoder, EncoderResiduals,
     Event, EventKind, Failure, Inputs, LinkState, Measurement, MotorInput, Twin, TwinSettings,
     TwinSetupError, TwinStepError, CATCH_UP, DIODE_HORIZON_STEPS, ENERGY_TOL_STEP, JOINTS,
-    JOINT_NAMES, MAX_EVENTS_PER_STEP, MAX_LOCATE_ITER, MAX_RETRIES, SINGULAR_CONDITIONING,
-    SUBSTEPS,
+    JOINT_NAMES, MAX_CONVERTER_LOAD, MAX_EVENTS_PER_STEP, MAX_LOCATE_ITER, MAX_RETRIES,
+    SINGULAR_CONDITIONING, SUBSTEPS,
 };

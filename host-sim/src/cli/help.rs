@@ -206,9 +206,9 @@ The bench log (CSV, one sample a row, uniform from t = 0; other columns ignored)
   crank_counts  crank encoder, 4096 counts a turn: floor(q1 / (2π/4096)), q1 not wrapped
   shaft_counts  shaft encoder, 4096 counts a turn, positive in the drive direction, 0 at
                 t = 0
-  A missing column, a value that is not a finite number, a count that is not whole, a
-  t that does not increase or is not uniform (a missing sample) is refused with its
-  line and column named (exit status 2).
+  A missing column, a value that is not a finite number, a count that is not whole or
+  past ±2^53, a first shaft count other than 0, a t that does not increase or is not
+  uniform (a missing sample) is refused with its line and column named (exit status 2).
 
 The twin steps at the log's sample period (h = the mean interval), each step under the
 sample's motor torque and load (held over the step); --params gives the converter's

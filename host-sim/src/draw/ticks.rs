@@ -32,6 +32,10 @@ pub fn nice(x: f64, round: bool) -> f64 {
     nf * p
 }
 
+/// The most tick intervals an axis takes (Heckbert's labelling gives about `n`; more
+/// means the arithmetic overflowed).
+const MAX_TICKS: f64 = 1000.0;
+
 /// Ticks of an axis.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Ticks {
@@ -66,6 +70,17 @@ pub fn ticks(lo: f64, hi: f64, n: usize) -> Ticks {
     let step = nice(range / (n - 1) as f64, true);
     let k0 = (lo / step).floor();
     let k1 = (hi / step).ceil();
+    // Ends near ±f64::MAX: the span or the nice step overflows (a step of 1 over a
+    // range of 1e308 would be 1e308 ticks). The axis is its two ends.
+    if !(step.is_finite() && (0.0..=MAX_TICKS).contains(&(k1 - k0))) {
+        return Ticks {
+            lo,
+            hi,
+            step: hi - lo,
+            values: vec![lo, hi],
+            decimals: 0,
+        };
+    }
     // Tick k is k·step (not a running sum: no drift).
     let values: Vec<f64> = (0..=(k1 - k0) as i64)
         .map(|k| (k0 + k as f64) * step)
@@ -155,5 +170,19 @@ mod tests {
         assert_eq!((t.lo, t.hi), (0.0, 1.0));
         let t = ticks(2.0, 1.0, 5);
         assert!(t.lo <= 1.0 && t.hi >= 2.0);
+    }
+
+    /// Ends near ±f64::MAX (a CSV's 1.7e308): the nice step overflows, or the span;
+    /// the axis is its two ends (it panicked allocating 2^63 ticks).
+    #[test]
+    fn ranges_near_the_largest_float() {
+        for (lo, hi) in [(0.0, 1.7e308), (-1e308, 1e308), (-f64::MAX, f64::MAX)] {
+            let t = ticks(lo, hi, 5);
+            assert_eq!(t.values, [lo, hi], "{lo}..{hi}");
+            assert!(t.values.iter().all(|v| !t.label(*v).is_empty()));
+        }
+        // 1e307 still has nice ticks: 0, 2e306, ... 1e307 (Heckbert's).
+        let t = ticks(0.0, 1e307, 5);
+        assert!(t.values.len() > 2 && t.values.len() < 20, "{t:?}");
     }
 }

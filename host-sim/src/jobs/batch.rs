@@ -274,7 +274,7 @@ pub fn write_table(w: &mut dyn Write, runs: &[BatchRun], outcomes: &[Outcome]) -
             w,
             "{job},{},{},{},{},{},{}",
             run.line,
-            run.opts.scenario.name(),
+            cell(run.opts.scenario.name()),
             cell(&run.args.join(" ")),
             cell(&file_name(job, total, &run.opts.scenario)),
             outcome.exit_code(),

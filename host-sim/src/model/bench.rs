@@ -91,8 +91,13 @@ impl fmt::Display for LogError {
 
 impl std::error::Error for LogError {}
 
+/// The largest count a log may hold, either sense: 2^53, the last whole number every
+/// float holds exactly.
+pub const MAX_COUNTS: u64 = 1 << 53;
+
 /// A bench log, validated: at least two samples, t strictly increasing and uniform from
-/// 0, every value finite, the counts whole numbers, 0 ≤ the load < [`MAX_CONVERTER_LOAD`].
+/// 0, every value finite, the counts whole numbers within ±[`MAX_COUNTS`], the shaft's
+/// 0 at the first sample, 0 ≤ the load < [`MAX_CONVERTER_LOAD`].
 #[derive(Clone, Debug, PartialEq)]
 pub struct BenchLog {
     /// The file's path (or the name given to its text).
@@ -187,7 +192,15 @@ impl BenchLog {
             }
             log.load.push(load);
             log.crank.push(at(3).count()?);
-            log.shaft.push(at(4).count()?);
+            let shaft = at(4).count()?;
+            // The twin's shaft starts at 0: the log's must (a counter's offset would
+            // read as a shaft residual of that many counts, and identify would fit it).
+            if log.shaft.is_empty() && shaft != 0 {
+                return Err(at(4).err(format!(
+                    "{shaft} at the first sample: the shaft's count is 0 at t = 0 (subtract the counter's start from the column)"
+                )));
+            }
+            log.shaft.push(shaft);
         }
         check_times(&log.t, &table.rows, origin)?;
         Ok(log)
@@ -501,6 +514,13 @@ impl Cell<'_> {
     /// A whole number of encoder counts.
     fn count(&self) -> Result<i64, LogError> {
         if let Ok(n) = self.text.parse::<i64>() {
+            // The residuals subtract counts, and identify takes them as f64: past 2^53
+            // neither is exact (and at i64's ends a difference overflows).
+            if n.unsigned_abs() > MAX_COUNTS {
+                return Err(self.err(format!(
+                    "{n} counts is past ±2^53, where a count is no longer exact in a float"
+                )));
+            }
             return Ok(n);
         }
         let v = self.number()?;
@@ -555,39 +575,39 @@ mod tests {
                 "b.csv: line 1, column load_torque: missing from the header",
             ),
             (
-                format!("{header}\n0,1,2,3,4\n0.001,NaN,2,3,4\n"),
+                format!("{header}\n0,1,2,3,0\n0.001,NaN,2,3,4\n"),
                 "b.csv: line 3, column motor_torque: NaN is not finite",
             ),
             (
-                format!("{header}\n0,1,2,3,4\n0.001,1,2,nan,4\n"),
+                format!("{header}\n0,1,2,3,0\n0.001,1,2,nan,4\n"),
                 "b.csv: line 3, column crank_counts: nan is not finite",
             ),
             (
-                format!("{header}\n0,1,2,3,4\n0.001,1,2,3,4.5\n"),
+                format!("{header}\n0,1,2,3,0\n0.001,1,2,3,4.5\n"),
                 "b.csv: line 3, column shaft_counts: 4.5 is not a whole number",
             ),
             (
-                format!("{header}\n0,1,2,3,4\n0.001,1,-2,3,4\n"),
+                format!("{header}\n0,1,2,3,0\n0.001,1,-2,3,4\n"),
                 "b.csv: line 3, column load_torque: -2 N·m is negative",
             ),
             (
-                format!("{header}\n0,1,2,3,4\n0.001,1,2,3\n"),
+                format!("{header}\n0,1,2,3,0\n0.001,1,2,3\n"),
                 "b.csv: line 3: 4 cells, the header has 5",
             ),
             (
-                format!("{header}\n0,1,2,3,4\n0.002,1,2,3,4\n0.001,1,2,3,4\n"),
+                format!("{header}\n0,1,2,3,0\n0.002,1,2,3,4\n0.001,1,2,3,4\n"),
                 "b.csv: line 4, column t: t = 0.001 s is not after",
             ),
             (
-                format!("{header}\n0,1,2,3,4\n0.001,1,2,3,4\n0.003,1,2,3,4\n0.004,1,2,3,4\n"),
+                format!("{header}\n0,1,2,3,0\n0.001,1,2,3,4\n0.003,1,2,3,4\n0.004,1,2,3,4\n"),
                 "b.csv: line 4, column t: t = 0.003 s is 0.002 s after the previous sample",
             ),
             (
-                format!("{header}\n1,1,2,3,4\n1.001,1,2,3,4\n"),
+                format!("{header}\n1,1,2,3,0\n1.001,1,2,3,4\n"),
                 "b.csv: line 2, column t: the log starts at t = 1 s, not 0",
             ),
             (
-                format!("{header}\n0,1,2,3,4\n"),
+                format!("{header}\n0,1,2,3,0\n"),
                 "b.csv: 1 samples: a log needs two at least",
             ),
             (
@@ -595,8 +615,20 @@ mod tests {
                 "b.csv: line 1, column t: named twice",
             ),
             (
-                format!("{header}\n0,1,2,3,4\n0.001,,2,3,4\n"),
+                format!("{header}\n0,1,2,3,0\n0.001,,2,3,4\n"),
                 "b.csv: line 3, column motor_torque: empty",
+            ),
+            (
+                format!("{header}\n0,1,2,3,5000\n0.001,1,2,3,5001\n"),
+                "b.csv: line 2, column shaft_counts: 5000 at the first sample: the shaft's count is 0 at t = 0",
+            ),
+            (
+                format!("{header}\n0,1,2,-9223372036854775808,0\n0.001,1,2,3,0\n"),
+                "b.csv: line 2, column crank_counts: -9223372036854775808 counts is past ±2^53",
+            ),
+            (
+                format!("{header}\n0,1,2,3,0\n0.001,1,2,3,9007199254740993\n"),
+                "b.csv: line 3, column shaft_counts: 9007199254740993 counts is past ±2^53",
             ),
         ] {
             let e = BenchLog::parse(&text, "b.csv").unwrap_err().to_string();

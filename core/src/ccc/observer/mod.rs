@@ -132,6 +132,7 @@ mod filter;
 pub use diagnostics::{BiasWatch, Diagnostic, Diagnostics};
 pub use filter::Covariance;
 
+use super::twin::inputs::check_inputs;
 use super::twin::{Correction, Inputs, MotorInput, Twin, TwinStepError};
 use crate::motor::{Asynchronous, Motor};
 use crate::scalar::Real;
@@ -234,6 +235,55 @@ pub struct ObserverSettings<T> {
 }
 
 impl<T: Real> ObserverSettings<T> {
+    /// The first setting that cannot make a filter, named as its field with its value:
+    /// a noise, a variance, a σ or a band that is negative or not finite (the
+    /// covariance would turn NaN and never recover), a limit, gate or threshold that is
+    /// negative or NaN (∞: none), a gain outside 0 to 1, a bias time that is not
+    /// positive and finite.
+    pub fn fault(&self) -> Option<(&'static str, T)> {
+        let finite = [
+            ("observer settings: accel_noise", self.accel_noise),
+            ("observer settings: event_speed_var", self.event_speed_var),
+            ("observer settings: torque_noise", self.torque_noise),
+            ("observer settings: friction_noise", self.friction_noise),
+            ("observer settings: friction_sigma", self.friction_sigma),
+            ("observer settings: mass_noise", self.mass_noise),
+            ("observer settings: mass_sigma", self.mass_sigma),
+            ("observer settings: event_torque_var", self.event_torque_var),
+            ("observer settings: initial_sigma.0", self.initial_sigma.0),
+            ("observer settings: initial_sigma.1", self.initial_sigma.1),
+            ("observer settings: initial_sigma.2", self.initial_sigma.2),
+            ("observer settings: min_transmission", self.min_transmission),
+            ("observer settings: state_band", self.state_band),
+            ("observer settings: torque_band", self.torque_band),
+            ("observer settings: two_dof_band", self.two_dof_band),
+        ];
+        let limits = [
+            ("observer settings: friction_limit", self.friction_limit),
+            ("observer settings: mass_limit", self.mass_limit),
+            ("observer settings: torque_limit", self.torque_limit),
+            ("observer settings: jump_gate", self.jump_gate),
+            ("observer settings: jump_counts", self.jump_counts),
+            ("observer settings: slip_counts", self.slip_counts),
+            ("observer settings: part_counts", self.part_counts),
+            ("observer settings: bias_limit", self.bias_limit),
+        ];
+        let gains = [
+            ("observer settings: two_dof_gain", self.two_dof_gain),
+            ("observer settings: held_gain", self.held_gain),
+        ];
+        let (zero, one) = (T::zero(), T::one());
+        finite
+            .into_iter()
+            .find(|(_, v)| !(v.finite() && *v >= zero))
+            .or_else(|| limits.into_iter().find(|(_, v)| !(*v >= zero)))
+            .or_else(|| gains.into_iter().find(|(_, v)| !(*v >= zero && *v <= one)))
+            .or_else(|| {
+                let b = self.bias_time;
+                (!(b.finite() && b > zero)).then_some(("observer settings: bias_time", b))
+            })
+    }
+
     /// The tuning for a twin with the drawing's nominal parameters (masses within
     /// ±10 %, no friction): the model's error is carried by the oscillating mass `m`
     /// (from the twin's with σ 0.11 kg, a random walk of 0.2 kg²/s, held within 25 %
@@ -387,7 +437,7 @@ pub struct TwinObserver<T: Real> {
     shaft_ref: Option<(i64, T)>,
     bias: BiasWatch<T>,
     last: Option<Update<T>>,
-    /// The crank's and the shaft's counts of the last good step.
+    /// The crank's and the shaft's last counts read (refused steps' included).
     counts: [Option<i64>; 2],
 }
 
@@ -534,13 +584,29 @@ impl<T: Real> TwinObserver<T> {
                 value: 1.0,
             });
         }
-        let counts = self.check_jumps(twin, inputs)?;
+        if let Some((field, value)) = self.settings.fault() {
+            return Err(TwinStepError::BadInput {
+                time: twin.time().to_f64(),
+                field,
+                value: value.to_f64(),
+            });
+        }
+        let jumps = self.check_jumps(twin, inputs);
+        // The readings are the machine's whatever comes of this step: the next step's
+        // jump is measured from them, so that a counter that took a new offset (a reset,
+        // an index pulse) is refused once, not at every step after it (its offset then
+        // meets the innovation's jump gate), and readings through refused steps (a bad
+        // torque) keep the check on the machine's motion.
+        self.take_readings(inputs);
+        // The inputs as given, named as given (the step below takes them with the
+        // estimated torque added: a torque then stands as a motor law's coefficient).
+        check_inputs(inputs, twin.time())?;
+        jumps?;
         // The prediction: the twin's step with the estimated torque on the crank added
         // to the motor's (a motor law that cannot take it: the estimate is held and
         // only the state corrected).
         let (biased, applied) = with_torque(inputs, self.torque, self.friction);
         twin.step(&biased)?;
-        self.counts = counts;
         let s = self.settings;
         let h = twin.h();
         let b = if applied {
@@ -697,7 +763,11 @@ impl<T: Real> TwinObserver<T> {
                 }
                 up.correction = Some(c);
             } else if !two_dof && !jump && s.held_gain > T::zero() {
-                up.correction = self.correct_held_lever(twin, nu, transmission, res)?;
+                // A move the twin cannot make leaves it as predicted (the move restores
+                // it), as a crank correction it refuses does.
+                up.correction = self
+                    .correct_held_lever(twin, nu, transmission, res)
+                    .unwrap_or(None);
             }
             if !jump {
                 self.jumps = 0;
@@ -756,26 +826,31 @@ impl<T: Real> TwinObserver<T> {
             .map(Some)
     }
 
+    /// Keeps `inputs`' valid crank and shaft counts as the last readings (an encoder
+    /// without a reading, or one with no resolution, keeps its last).
+    fn take_readings(&mut self, inputs: &Inputs<T>) {
+        let Some(m) = inputs.measured else { return };
+        for (last, e) in self.counts.iter_mut().zip([m.crank, m.shaft]) {
+            if let Some(e) = e.filter(|e| e.per_turn > 0) {
+                *last = Some(e.counts);
+            }
+        }
+    }
+
     /// The crank's and shaft's counts of `inputs`, or the error that names an encoder
     /// whose count moved by half a turn or more since the last step: such a change
     /// within one step cannot be told from one the other way round, so it is no reading
     /// of a motion.
-    fn check_jumps(
-        &self,
-        twin: &Twin<T>,
-        inputs: &Inputs<T>,
-    ) -> Result<[Option<i64>; 2], TwinStepError> {
+    fn check_jumps(&self, twin: &Twin<T>, inputs: &Inputs<T>) -> Result<(), TwinStepError> {
         let Some(m) = inputs.measured else {
-            return Ok([None; 2]);
+            return Ok(());
         };
         let encoders = [
             (m.crank, "crank encoder jump (counts in one step)"),
             (m.shaft, "shaft encoder jump (counts in one step)"),
         ];
-        let mut now = [None; 2];
-        for ((n, last), (e, field)) in now.iter_mut().zip(self.counts).zip(encoders) {
+        for (last, (e, field)) in self.counts.into_iter().zip(encoders) {
             let Some(e) = e else { continue };
-            *n = Some(e.counts);
             let jump = last.map_or(0, |c| e.counts.saturating_sub(c).unsigned_abs());
             if jump.saturating_mul(2) >= u64::from(e.per_turn) && e.per_turn > 0 {
                 return Err(TwinStepError::BadInput {
@@ -785,7 +860,7 @@ impl<T: Real> TwinObserver<T> {
                 });
             }
         }
-        Ok(now)
+        Ok(())
     }
 
     /// The shaft's diagnostics: its motion measured since the last mode change

@@ -2,6 +2,7 @@
 
 use super::super::build::{BRANCHES, ROCKER};
 use super::super::mode::{Coordinates, Mode};
+use super::inputs::MAX_CONVERTER_LOAD;
 use super::settings::*;
 use super::slot::physical;
 use super::Twin;
@@ -58,7 +59,9 @@ pub enum TwinStepError {
         /// Its value.
         value: f64,
     },
-    /// The time `(n + 1)·h` of the next step overflows the scalar type.
+    /// The time `(n + 1)·h` of the next step overflows the scalar type, or the scalar no
+    /// longer resolves the step there (its spacing h/2 or more: f32 at h = 1 ms from
+    /// 8192 s on).
     TimeOverflow {
         /// Steps taken, n.
         steps: u64,
@@ -218,8 +221,20 @@ impl fmt::Display for TwinStepError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             TwinStepError::BadInput { time, field, value } => {
-                let rule = if *field == "load" {
-                    "must be finite and ≥ 0"
+                if *field == "load" {
+                    return write!(
+                        f,
+                        "t = {time:.6} s: the input load = {} must be finite, ≥ 0 and under {} N·m (the clutches' torque tolerance scales with it): no step taken",
+                        Value(*value),
+                        Value(MAX_CONVERTER_LOAD)
+                    );
+                }
+                let rule = if field.starts_with("observer settings") {
+                    "cannot make a filter (a noise, σ or band must be finite and ≥ 0, a limit or gate ≥ 0, a gain within 0 to 1, bias_time > 0)"
+                } else if field.starts_with("twin settings") {
+                    "is not allowed"
+                } else if *field == "oscillating mass" {
+                    "must be finite and > 0"
                 } else if field.contains("resolution") {
                     "must be > 0"
                 } else if field.contains("jump") {
@@ -235,7 +250,7 @@ impl fmt::Display for TwinStepError {
             }
             TwinStepError::TimeOverflow { steps, h } => write!(
                 f,
-                "the time of step {} at h = {h:e} s overflows the scalar type",
+                "the time of step {} at h = {h:e} s overflows the scalar type or no longer resolves the step in it (a longer run needs f64)",
                 steps.saturating_add(1)
             ),
             TwinStepError::Model { time, mode, error } => write!(
@@ -307,6 +322,8 @@ impl TwinStepError {
             "t = {time:.6} s: mode {mode}: a singularity of the mechanism at t = {at:.7} s (located inside the step): the diode's rods and levers in line, "
         )?;
         let mut first = true;
+        // The stretched length of the first branch in line (the branches may differ).
+        let mut full_in_line = None;
         for (k, (rod, lever)) in BRANCHES.into_iter().enumerate() {
             let (Some(sine), Some(full), Some(true), Some(within)) = (
                 sines.get(k),
@@ -328,11 +345,12 @@ impl TwinStepError {
             }
             f.write_str(")")?;
             first = false;
+            full_in_line.get_or_insert(*full);
         }
+        let full = full_in_line.unwrap_or(stretched_reach[0]);
         write!(
             f,
-            ", |DH| = {reach:.7} m of rod + lever = {:.7} m: their constraints lose rank, no coordinate choice drives it",
-            stretched_reach[0]
+            ", |DH| = {reach:.7} m of rod + lever = {full:.7} m: their constraints lose rank, no coordinate choice drives it"
         )
     }
 

@@ -197,10 +197,18 @@ fn law_fault<T: Real>(m: &Motor<T>) -> Option<(&'static str, T)> {
     .filter(|(_, v)| !v.finite())
 }
 
+/// The converter's load torque T_r (N·m) from which on a step is refused: the twin
+/// releases a locked lever when its clutch torque falls below -1e-9 (T_r + 1 N·m) (the
+/// event functions' torque tolerance, `guards.rs`), so from 1e6 N·m on an accepted state
+/// may hold a clutch torque below -1e-3 N·m and a release comes late by that tolerance
+/// over the torque's rate (S2 at T_r = 1e7: c8 = -7.4e-3 N·m, the release 5e-5 s late;
+/// at 1e11, -98 N·m), far coarser than the converter's own torques.
+pub const MAX_CONVERTER_LOAD: f64 = 1e6;
+
 /// The per-step inputs are valid, or the error that names the first that is not
 /// (`time`: the twin's, s). A count's jump between steps is the observer's to judge
 /// ([`TwinObserver`](crate::ccc::TwinObserver)): the twin keeps no count.
-pub(super) fn check_inputs<T: Real>(inputs: &Inputs<T>, time: T) -> Result<(), TwinStepError> {
+pub(crate) fn check_inputs<T: Real>(inputs: &Inputs<T>, time: T) -> Result<(), TwinStepError> {
     let bad = |field, value: T| {
         Err(TwinStepError::BadInput {
             time: time.to_f64(),
@@ -208,8 +216,9 @@ pub(super) fn check_inputs<T: Real>(inputs: &Inputs<T>, time: T) -> Result<(), T
             value: value.to_f64(),
         })
     };
-    if !(inputs.load.finite() && inputs.load >= T::zero()) {
-        return bad("load", inputs.load);
+    let load = inputs.load;
+    if !(load.finite() && load >= T::zero() && load < T::c(MAX_CONVERTER_LOAD)) {
+        return bad("load", load);
     }
     match inputs.motor {
         MotorInput::Torque(v) if !v.finite() => return bad("motor torque", v),

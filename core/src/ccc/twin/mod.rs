@@ -36,7 +36,7 @@ mod event_state;
 mod guards;
 mod held_lever;
 mod impact;
-mod inputs;
+pub(crate) mod inputs;
 mod locate;
 mod mass;
 mod outputs;
@@ -53,7 +53,7 @@ use coordinates::Leave;
 pub use correction::Correction;
 pub use error::{Failure, TwinSetupError, TwinStepError};
 pub use guards::{Event, EventKind};
-pub use inputs::{Encoder, Inputs, Measurement, MotorInput};
+pub use inputs::{Encoder, Inputs, Measurement, MotorInput, MAX_CONVERTER_LOAD};
 pub use outputs::EncoderResiduals;
 pub use settings::{
     energy_tolerance, TwinSettings, CATCH_UP, DIODE_HORIZON_STEPS, ENERGY_TOL_STEP,
@@ -615,8 +615,14 @@ impl<T: Real> Twin<T> {
 
     /// The time `(n + 1)·h` the next step ends at, s.
     fn step_end(&self) -> Result<T, TwinStepError> {
-        let t_end = T::c((self.steps + 1) as f64) * self.settings.h;
-        if !t_end.finite() {
+        let h = self.settings.h;
+        let t_end = T::c((self.steps + 1) as f64) * h;
+        // The scalar must resolve the step: where its spacing u near t reaches h/2 a
+        // step would be rounded to 0 or 2h and the twin's clock leave the machine's
+        // (f32 at h = 1 ms from 8192 s on, at 2e-4 s from 1024 s). t + h/4 rounds
+        // back to t where u/2 > h/4 (one add: the step count's conversion to
+        // a float is a library call on the Cortex-M).
+        if !(t_end.finite() && t_end + h * T::c(0.25) > t_end) {
             return Err(TwinStepError::TimeOverflow {
                 steps: self.steps,
                 h: self.settings.h.to_f64(),

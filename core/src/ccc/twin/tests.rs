@@ -293,3 +293,69 @@ fn new_inputs_at_the_kinematics_held_commit_a_full_evaluations_bits() {
         }
     }
 }
+
+/// An f32 twin's clock: `(n + 1)·h` in f32 resolves a step of 1 ms up to about 8192 s
+/// (the spacing of f32 there, 2^-10 s, is then over h/2: a step would be rounded to 0 or
+/// 2h). The oracle is f32's spacing itself: at n = 2^20 (1049 s, spacing 1.2e-4 s) every
+/// step is taken, at n = 2^23 (8389 s, spacing 9.8e-4 s: a step's rounded length is 0,
+/// 0.98 or 1.95 ms) a step is refused, named, the state kept, and none is taken whose
+/// length is off h by h/2 or more; the twin is S2's at rest after its jam, whose state
+/// does not depend on the time.
+#[test]
+fn an_f32_clock_that_no_longer_resolves_the_step_is_refused() {
+    use crate::ccc::twin::TwinStepError;
+    use std::string::ToString;
+    let inputs = Inputs {
+        motor: MotorInput::Law(Motor::Constant(12.0f32)),
+        load: 800.0,
+        measured: None,
+    };
+    let h = 1e-3f32;
+    let mut twin = Box::new(
+        Twin::new(
+            CccParams::<f32>::reference(),
+            TwinSettings::reference(h),
+            inputs,
+        )
+        .unwrap(),
+    );
+    for _ in 0..1000 {
+        twin.step(&inputs).unwrap();
+        if twin.at_rest {
+            break;
+        }
+    }
+    assert!(twin.at_rest, "S2 jams before 1 s in f32");
+    let at = |twin: &mut Twin<f32>, n: u64| {
+        twin.steps = n;
+        twin.t = n as f32 * h;
+    };
+    at(&mut twin, 1 << 20);
+    for _ in 0..100 {
+        twin.step(&inputs)
+            .expect("f32 resolves a 1 ms step at 1049 s");
+    }
+    at(&mut twin, 1 << 23);
+    let mut refused = None;
+    for _ in 0..100 {
+        let (t, n, links) = (twin.t, twin.steps, twin.links);
+        match twin.step(&inputs) {
+            Ok(_) => {
+                let len = twin.t - t;
+                assert!((len - h).abs() < 0.5 * h, "a step of {len} s taken");
+            }
+            Err(e) => {
+                assert!(matches!(e, TwinStepError::TimeOverflow { .. }), "{e}");
+                assert!(e.to_string().contains("no longer resolves"), "{e}");
+                assert_eq!((twin.t, twin.steps), (t, n), "the clock kept");
+                assert_eq!(format!("{:?}", twin.links), format!("{links:?}"));
+                refused = Some(n);
+                break;
+            }
+        }
+    }
+    assert!(
+        refused.is_some(),
+        "no step refused within 100 steps at 8389 s"
+    );
+}

@@ -344,14 +344,17 @@ fn summary(
             for (k, (e, p)) in b.evals.iter().zip(&d.points).enumerate() {
                 writeln!(
                     w,
-                    "point {}   T_r = {} N·m, {} s: mean power {:.3} W over the last half, efficiency {:.4} (load work / motor work; {:.4} over the last half), min diode margin {:.4} m, no jam",
+                    "point {}   T_r = {} N·m, {} s: mean power {:.3} W over the last half, efficiency {:.4} (load work / motor work; {:.4} over the last half), min diode margin {:.4} m, {}",
                     k + 1,
                     p.load,
                     p.horizon,
                     e.mean_power,
                     e.efficiency(),
                     outputs::half_efficiency(e),
-                    e.min_margin
+                    e.min_margin,
+                    // With `no_jam = false` a design that jams may win: say when.
+                    e.jam_at
+                        .map_or_else(|| "no jam".to_string(), |t| format!("jammed at {t:.4} s"))
                 )?;
             }
         }

@@ -66,6 +66,7 @@ use crate::model::bench::{BenchLog, ClutchLog, COUNTS_PER_TURN};
 use crate::model::identifiable::Param;
 use crate::model::scenarios::CccScenario;
 use crate::output::{Observer, State};
+use crate::run::interrupt;
 use crate::run::replay::{self, EncoderLaw, ReplaySummary};
 use argmin::core::observers::{Observe, ObserverMode};
 use argmin::core::{CostFunction, Error as ArgminError, Executor, State as _, KV};
@@ -368,6 +369,11 @@ impl CostFunction for Problem<'_> {
     type Output = f64;
 
     fn cost(&self, u: &Vec<f64>) -> Result<f64, ArgminError> {
+        // SIGINT or SIGTERM: the search stops here (a replay stopped at its start would
+        // cost the same at any values, and the search would end on it as converged).
+        if interrupt::requested() {
+            return Err(ArgminError::msg("interrupted"));
+        }
         let inside: Vec<f64> = u.iter().map(|x| x.clamp(0.0, 1.0)).collect();
         let out: f64 = u.iter().zip(&inside).map(|(a, b)| (a - b) * (a - b)).sum();
         let cost = match self.trial(&self.values(&inside)) {
@@ -615,9 +621,13 @@ impl Search {
                     ObserverMode::Every(10),
                 );
             }
-            let mut result = exec
-                .run()
-                .map_err(|e| RunError::Setup(format!("identify: the search failed: {e}")))?;
+            let mut result = exec.run().map_err(|e| {
+                if interrupt::requested() {
+                    RunError::Interrupted("identify's search")
+                } else {
+                    RunError::Setup(format!("identify: the search failed: {e}"))
+                }
+            })?;
             problem = result.problem.take_problem().ok_or_else(|| {
                 RunError::Setup("identify: the search kept its problem".to_string())
             })?;

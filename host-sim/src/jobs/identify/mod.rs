@@ -9,11 +9,11 @@ pub mod fit;
 
 pub use fit::{fit, Fit, Identified, Problem};
 
-use crate::error::{report_run_error, Fig, RunError, Sci};
+use crate::error::{report_run_error, write_whole, Fig, RunError, Sci, UsageError};
 use crate::model::runfile::{parse_value, run_file_from_value, set_dotted};
 use crate::options::IdentifyOptions;
 use crate::run::converter::End;
-use crate::run::replay;
+use crate::run::{interrupt, replay};
 use std::fmt;
 use std::io::Write;
 
@@ -167,6 +167,19 @@ pub fn run(opts: &IdentifyOptions) -> Result<Fit, RunError> {
         &targets,
         "identify",
     )?;
+    // A mass or inertia is searched within ±10 % of its base value: of a base of 0
+    // that is no range, and its fit (never moved, its σ NaN) would take every other
+    // parameter's σ with it.
+    for p in &opts.fit {
+        let base = p.get(&settings.converter);
+        let (lo, hi) = p.bounds(base);
+        if hi.partial_cmp(&lo) != Some(std::cmp::Ordering::Greater) {
+            return Err(RunError::Usage(UsageError(format!(
+                "--fit: {}: its value in {params} is {base}, and its search's bounds (±10 % of it) hold nothing else: give it a non-zero value to start from",
+                p.key()
+            ))));
+        }
+    }
     let problem = Problem::new(
         &params,
         settings,
@@ -176,8 +189,13 @@ pub fn run(opts: &IdentifyOptions) -> Result<Fit, RunError> {
     )
     .in_stages(&opts.stages);
     let fitted = fit(problem, opts.max_iters, opts.quiet)?;
+    // A signal after the search (in the last replays, the uncertainty's): those stopped
+    // at their start, and their numbers are not the fit's.
+    if interrupt::requested() {
+        return Err(RunError::Interrupted("identify"));
+    }
     let text = run_file_text(opts, &fitted)?;
-    std::fs::write(&opts.out, text)
+    write_whole(&opts.out, text.as_bytes())
         .map_err(|e| RunError::write(&opts.out.display().to_string(), e))?;
     Ok(fitted)
 }

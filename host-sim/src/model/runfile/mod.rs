@@ -33,13 +33,9 @@ use structomat::{ModelError, Real};
 /// then far coarser than the mechanism's own energies and torques.
 pub const MAX_LOAD: f64 = 1e12;
 
-/// The converter's load torque T_r (N·m) from which on a run is refused: the twin
-/// releases a locked lever when its clutch torque falls below -1e-9 (T_r + 1 N·m)
-/// (`structomat::ccc`'s torque tolerance), so from 1e6 N·m on an accepted state may
-/// hold a clutch torque below -1e-3 N·m and a release comes late by that tolerance
-/// over the torque's rate (S2 at T_r = 1e7: c8 = -7.4e-3 N·m, the release 5e-5 s
-/// late; at 1e11, -98 N·m), far coarser than the converter's own torques.
-pub const MAX_CONVERTER_LOAD: f64 = 1e6;
+/// The converter's load torque T_r (N·m) from which on a run is refused: the core's
+/// limit (a twin's step refuses it too; see its docs for why).
+pub use structomat::ccc::MAX_CONVERTER_LOAD;
 
 /// A bad run file: which file, where (when the toml parser knows), which field, what is
 /// wrong. Displayed as `FILE[:LINE:COLUMN]: FIELD: MESSAGE`.
