@@ -308,4 +308,28 @@ mod tests {
             assert_eq!(k5[4], 0.0);
         }
     }
+
+    /// The update of a gain without the mass's row (the twin kept its mass: the
+    /// observer's update when the mass's correction is refused) leaves the mass's
+    /// variance as predicted, while the optimal gain shrinks it; both are symmetric
+    /// and positive on the diagonal (the Joseph form holds for any gain).
+    #[test]
+    fn a_gain_without_the_mass_s_row_leaves_its_variance() {
+        let mut p = Covariance::<f64>::diagonal((0.1, 5.0, 2.0), 0.05, 0.5);
+        for _ in 0..50 {
+            p = p.predict(1e-3, (8.0, -20.0, 12.0), (50.0, 100.0, 0.01, 0.05));
+        }
+        let r = 2e-7;
+        let k = p.gain(r);
+        assert!(k[4].abs() > 0.0, "the mass is observed: {k:?}");
+        let mut kept = k;
+        kept[4] = 0.0;
+        let (full, made) = (p.update(&k, r), p.update(&kept, r));
+        assert!(full.m[(4, 4)] < p.m[(4, 4)]);
+        assert_eq!(made.m[(4, 4)].to_bits(), p.m[(4, 4)].to_bits());
+        for c in [full, made] {
+            assert_eq!(c.m, c.m.transpose());
+            assert!((0..N).all(|i| c.m[(i, i)] > 0.0));
+        }
+    }
 }

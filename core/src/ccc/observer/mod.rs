@@ -744,6 +744,7 @@ impl<T: Real> TwinObserver<T> {
                     && mass.finite()
                     && made + made >= asked
                 {
+                    let predicted = prior;
                     prior = posterior;
                     self.torque = torque;
                     self.friction = friction;
@@ -752,12 +753,23 @@ impl<T: Real> TwinObserver<T> {
                     // The twin takes the mass, or keeps its own (a change that would
                     // move an event function past its crossing, or fail to evaluate):
                     // the estimate is what the twin carries.
-                    if estimate_mass
-                        && mass != self.mass_offset
-                        && twin.set_oscillating_mass(nominal + mass).is_ok()
-                        && twin.oscillating_mass() == nominal + mass
-                    {
-                        self.mass_offset = mass;
+                    if estimate_mass && mass != self.mass_offset {
+                        if twin.set_oscillating_mass(nominal + mass).is_ok()
+                            && twin.oscillating_mass() == nominal + mass
+                        {
+                            self.mass_offset = mass;
+                        } else {
+                            // The twin kept its mass: the update made is that of the
+                            // gain without the mass's row (the Joseph form holds for
+                            // any gain), so that the mass's variance does not shrink
+                            // for a correction not made.
+                            let mut kept = k;
+                            kept[4] = T::zero();
+                            let made = predicted.update(&kept, r);
+                            if made.finite() {
+                                prior = made;
+                            }
+                        }
                     }
                     up.mass = twin.oscillating_mass();
                 }
