@@ -103,7 +103,8 @@ pub fn applied_forces<T: Real, C: Capacity<T>>(
     Ok(())
 }
 
-/// The motion a drive's law reads: its coordinate and rate, or for a drive across a
+/// The motion a drive's law reads: its coordinate and rate (a motor element R pivoted
+/// on a moving link: less that link's angle and speed), or for a drive across a
 /// joint ([`Drive`]) the joint's relative angle `θ_i - θ_j` (rad) and speed, or the
 /// offset of the slider's joint point along the guide of `j` (m, from the guide's
 /// joint point) and its rate.
@@ -114,10 +115,24 @@ pub fn drive_motion<T: Real, C: Capacity<T>>(
 ) -> (T, T) {
     let Some(j) = d.joint else {
         let c = d.coord as usize;
-        return (
+        let (q, qd) = (
             ws.q.get(c).copied().unwrap_or(T::zero()),
             ws.qd.get(c).copied().unwrap_or(T::zero()),
         );
+        // A motor element R's coordinate is its link's absolute angle; its motor acts
+        // between the link and the body its pivot is on (the torque pair of `loads`),
+        // so its law reads, and its power is, the motion relative to that body: on the
+        // ground (every built-in) the coordinate itself, on a moving link (an elbow)
+        // less that link's angle and speed.
+        let carrier = model
+            .groups()
+            .get(d.group as usize)
+            .and_then(|g| g.joints.iter().find(|jt| jt.kind == JointKind::DriveTorque))
+            .map_or(0, |jt| jt.j);
+        return match ws.body.get(carrier as usize) {
+            Some(b) if carrier != 0 => (q - b.theta, qd - b.omega),
+            _ => (q, qd),
+        };
     };
     let Some(jt) = model
         .groups()
