@@ -63,6 +63,11 @@ pub struct Equations<'a, T: Real> {
 
 impl<T: Real> OdeSystem<T, STATE_DIM> for Equations<'_, T> {
     type Error = StepError;
+    /// The coordinates and their rates of the model's degrees of freedom: the rest of
+    /// the state is padding (0).
+    fn live(&self) -> usize {
+        2 * self.model.dof().min(MAX_DOF)
+    }
     fn eval(
         &mut self,
         t: T,

@@ -282,7 +282,7 @@ impl<T: Real, const N: usize> Adaptive<T, N> {
         self.dp5
             .attempt(sys, *t, y, h, t1)
             .map_err(AdaptiveError::System)?;
-        let err = self.error_norm(y);
+        let err = self.error_norm(y, sys.live());
         let s = &self.settings;
         if err <= T::c(1.0) {
             let mut fac = if err == T::c(0.0) {
@@ -328,11 +328,14 @@ impl<T: Real, const N: usize> Adaptive<T, N> {
     }
 
     /// `sqrt(mean_i (e_i / (atol + rtol·max(|y_i|, |y1_i|)))²)` of the attempted step
-    /// (Hairer's norm); 0 for `N = 0`; NaN when the attempt produced NaN.
-    fn error_norm(&self, y: &SVector<T, N>) -> T {
+    /// (Hairer's norm), the mean over the system's `live` scalars
+    /// ([`OdeSystem::live`]; its padding's errors are 0); 0 for `N = 0`; NaN when the
+    /// attempt produced NaN.
+    fn error_norm(&self, y: &SVector<T, N>, live: usize) -> T {
         if N == 0 {
             return T::c(0.0);
         }
+        let live = live.clamp(1, N);
         let s = &self.settings;
         let mut sum = T::c(0.0);
         for ((e, y0), y1) in self
@@ -346,7 +349,7 @@ impl<T: Real, const N: usize> Adaptive<T, N> {
             let r = *e / sc;
             sum += r * r;
         }
-        (sum / T::c(N as f64)).sqrt()
+        (sum / T::c(live as f64)).sqrt()
     }
 }
 
@@ -739,11 +742,66 @@ mod tests {
             .attempt(&mut Lin { lambda: 1.0 }, 0.0, &y1, 1e-2, 1e-2)
             .unwrap();
         a2.dp5.attempt(&mut Two, 0.0, &y2, 1e-2, 1e-2).unwrap();
-        let (n1, n2) = (a1.error_norm(&y1), a2.error_norm(&y2));
+        let (n1, n2) = (a1.error_norm(&y1, 1), a2.error_norm(&y2, 2));
         // Hand computation for one component.
         let e = a1.dp5.trial_err()[0];
         let sc = s.atol + s.rtol * 1.0f64.max(a1.dp5.trial_y1()[0].abs());
         assert!((n1 - (e / sc).abs()).abs() <= 1e-15 * n1);
         assert!((n1 - n2).abs() <= 1e-15 * n1);
+    }
+
+    /// A system padded with scalars it keeps at 0 (a 1-DOF mechanism in a larger
+    /// state) and saying so (`live`) is integrated as the unpadded one, step for step
+    /// and bit for bit: its zeros no longer dilute the error norm (they made the
+    /// tolerance √(N/live) times the one asked, and the steps longer).
+    #[test]
+    fn padding_does_not_loosen_the_tolerance() {
+        struct Padded {
+            live: usize,
+        }
+        impl OdeSystem<f64, 4> for Padded {
+            type Error = Infallible;
+            fn eval(
+                &mut self,
+                t: f64,
+                y: &nalgebra::Vector4<f64>,
+                dy: &mut nalgebra::Vector4<f64>,
+            ) -> Result<(), Infallible> {
+                *dy = nalgebra::Vector4::new(-50.0 * (y[0] - t.cos()), 0.0, 0.0, 0.0);
+                Ok(())
+            }
+            fn live(&self) -> usize {
+                self.live
+            }
+        }
+        let s = AdaptiveSettings {
+            rtol: 1e-8,
+            atol: 1e-10,
+            ..Default::default()
+        };
+        let mut one = Adaptive::<f64, 1>::new(s).unwrap();
+        let (mut t1, mut y1) = (0.0, Vector1::new(0.0));
+        let st1 = one
+            .integrate_to(&mut Relax { k: 50.0 }, &mut t1, &mut y1, 2.0)
+            .unwrap();
+        let run = |live: usize| {
+            let mut a = Adaptive::<f64, 4>::new(s).unwrap();
+            let (mut t, mut y) = (0.0, nalgebra::Vector4::zeros());
+            let st = a
+                .integrate_to(&mut Padded { live }, &mut t, &mut y, 2.0)
+                .unwrap();
+            (st, y[0])
+        };
+        let (said, y_said) = run(1);
+        assert_eq!(said.accepted, st1.accepted);
+        assert_eq!(y_said.to_bits(), y1[0].to_bits());
+        // Unsaid, the padding takes the tolerance √4 = 2 times looser: fewer steps.
+        let (unsaid, _) = run(4);
+        assert!(
+            unsaid.accepted < st1.accepted,
+            "{} vs {}",
+            unsaid.accepted,
+            st1.accepted
+        );
     }
 }

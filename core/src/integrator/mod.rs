@@ -36,4 +36,14 @@ pub trait OdeSystem<T: Real, const N: usize> {
     /// A system may skip there what only the state's own outputs need. The default
     /// does nothing.
     fn inner_stage(&mut self, _inner: bool) {}
+
+    /// How many of the `N` scalars are the system's (the first ones and any others
+    /// the system keeps at 0 count for nothing else): an error norm is their mean. A
+    /// system padded to a fixed `N` (a mechanism of fewer degrees of freedom than the
+    /// state holds) says how many it uses, so that its zeros do not dilute the norm
+    /// (a 1-DOF mechanism in a 6-scalar state had a tolerance √3 times the one asked).
+    /// The default: all `N`.
+    fn live(&self) -> usize {
+        N
+    }
 }
